@@ -1,0 +1,351 @@
+"""Shared helpers for the hbil sample scenes (room_poles.py, courtyard.py).
+
+Builds geometry with plain diffuse / emission materials, configures Cycles and
+the view-layer passes, renders a frame range one frame at a time and writes the
+camera sidecar next to every frame (export_camera.py).
+
+Command line common to all scene scripts (after ``--``)::
+
+    --out DIR          output folder; frames go to DIR/frame_####.exr
+    --mode main|bounce1
+                       main:    8 diffuse bounces, all passes (Combined, Depth, Normal,
+                                Position, Vector, DiffCol/Dir/Ind, Emit, Env, AO)
+                       bounce1: 1 diffuse bounce, DiffCol/Dir/Ind + Depth only
+    --samples N        Cycles samples per pixel (fixed, no adaptive sampling)
+    --seed S           Cycles seed (fixed for all frames)
+    --frames 1-8       frames to render
+    --save-blend PATH  also save the built scene
+    --no-render        build (and save) only
+"""
+
+import argparse
+import math
+import os
+import sys
+import time
+
+import bpy
+from mathutils import Vector
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import export_camera  # noqa: E402
+
+RES = (256, 144)
+FRAMES = (1, 8)
+
+
+# --------------------------------------------------------------------------- #
+# arguments
+# --------------------------------------------------------------------------- #
+def parse_args():
+    argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
+    p = argparse.ArgumentParser()
+    p.add_argument("--out", required=False)
+    p.add_argument("--mode", choices=["main", "bounce1"], default="main")
+    p.add_argument("--samples", type=int, default=64)
+    p.add_argument("--seed", type=int, default=1)
+    p.add_argument("--frames", default="%d-%d" % FRAMES)
+    p.add_argument("--save-blend")
+    p.add_argument("--no-render", action="store_true")
+    return p.parse_args(argv)
+
+
+# --------------------------------------------------------------------------- #
+# scene building
+# --------------------------------------------------------------------------- #
+def clear_scene():
+    for ob in list(bpy.data.objects):
+        bpy.data.objects.remove(ob, do_unlink=True)
+    for coll in (bpy.data.meshes, bpy.data.materials, bpy.data.lights, bpy.data.cameras):
+        for d in list(coll):
+            coll.remove(d)
+    scene = bpy.context.scene
+    scene.unit_settings.system = 'METRIC'
+    scene.unit_settings.scale_length = 1.0
+    return scene
+
+
+_materials = {}
+
+
+def diffuse(name, color):
+    """Pure Diffuse BSDF (roughness 0, i.e. Lambert)."""
+    key = ("d", name)
+    if key in _materials:
+        return _materials[key]
+    m = bpy.data.materials.new(name)
+    m.use_nodes = True
+    nt = m.node_tree
+    nt.nodes.clear()
+    out = nt.nodes.new("ShaderNodeOutputMaterial")
+    bsdf = nt.nodes.new("ShaderNodeBsdfDiffuse")
+    bsdf.inputs["Color"].default_value = (color[0], color[1], color[2], 1.0)
+    bsdf.inputs["Roughness"].default_value = 0.0
+    nt.links.new(bsdf.outputs["BSDF"], out.inputs["Surface"])
+    m.diffuse_color = (color[0], color[1], color[2], 1.0)
+    _materials[key] = m
+    return m
+
+
+def emission(name, color, strength):
+    key = ("e", name)
+    if key in _materials:
+        return _materials[key]
+    m = bpy.data.materials.new(name)
+    m.use_nodes = True
+    nt = m.node_tree
+    nt.nodes.clear()
+    out = nt.nodes.new("ShaderNodeOutputMaterial")
+    em = nt.nodes.new("ShaderNodeEmission")
+    em.inputs["Color"].default_value = (color[0], color[1], color[2], 1.0)
+    em.inputs["Strength"].default_value = strength
+    nt.links.new(em.outputs["Emission"], out.inputs["Surface"])
+    _materials[key] = m
+    return m
+
+
+def _finish(ob, name, mat, smooth=False):
+    ob.name = name
+    ob.data.name = name
+    ob.data.materials.clear()
+    ob.data.materials.append(mat)
+    if smooth:
+        for poly in ob.data.polygons:
+            poly.use_smooth = True
+    return ob
+
+
+def box(name, mn, mx, mat, rot_z_deg=0.0):
+    """Axis-aligned box from corner mn to corner mx (metres), optional yaw about its centre."""
+    mn, mx = Vector(mn), Vector(mx)
+    c = (mn + mx) / 2
+    bpy.ops.mesh.primitive_cube_add(size=1.0, location=c)
+    ob = bpy.context.active_object
+    ob.scale = mx - mn
+    ob.rotation_euler[2] = math.radians(rot_z_deg)
+    return _finish(ob, name, mat)
+
+
+def cylinder(name, x, y, z0, z1, radius, mat, verts=24):
+    bpy.ops.mesh.primitive_cylinder_add(vertices=verts, radius=radius, depth=z1 - z0,
+                                        location=(x, y, (z0 + z1) / 2))
+    ob = _finish(bpy.context.active_object, name, mat, smooth=True)
+    # keep the caps flat: only the side faces are smooth
+    for poly in ob.data.polygons:
+        if abs(poly.normal.z) > 0.5:
+            poly.use_smooth = False
+    return ob
+
+
+def sphere(name, loc, radius, mat):
+    bpy.ops.mesh.primitive_uv_sphere_add(segments=48, ring_count=24, radius=radius,
+                                         location=loc)
+    return _finish(bpy.context.active_object, name, mat, smooth=True)
+
+
+def world(scene, color, strength=1.0):
+    w = scene.world or bpy.data.worlds.new("World")
+    scene.world = w
+    w.use_nodes = True
+    nt = w.node_tree
+    nt.nodes.clear()
+    out = nt.nodes.new("ShaderNodeOutputWorld")
+    bg = nt.nodes.new("ShaderNodeBackground")
+    bg.inputs["Color"].default_value = (color[0], color[1], color[2], 1.0)
+    bg.inputs["Strength"].default_value = strength
+    nt.links.new(bg.outputs["Background"], out.inputs["Surface"])
+    w.color = color
+    return w
+
+
+def sun(name, travel_dir, strength, angle_deg=1.0):
+    """Sun whose light travels along ``travel_dir``."""
+    ld = bpy.data.lights.new(name, 'SUN')
+    ld.energy = strength
+    ld.angle = math.radians(angle_deg)
+    ob = bpy.data.objects.new(name, ld)
+    bpy.context.scene.collection.objects.link(ob)
+    d = Vector(travel_dir).normalized()
+    ob.rotation_mode = 'QUATERNION'
+    ob.rotation_quaternion = d.to_track_quat('-Z', 'Y')
+    ob.location = -5 * d
+    return ob
+
+
+def area_light(name, loc, size, power, color=(1, 1, 1), travel_dir=(0, 0, -1)):
+    ld = bpy.data.lights.new(name, 'AREA')
+    ld.shape = 'SQUARE'
+    ld.size = size
+    ld.energy = power
+    ld.color = color
+    ob = bpy.data.objects.new(name, ld)
+    bpy.context.scene.collection.objects.link(ob)
+    ob.location = loc
+    ob.rotation_mode = 'QUATERNION'
+    ob.rotation_quaternion = Vector(travel_dir).normalized().to_track_quat('-Z', 'Y')
+    return ob
+
+
+def camera(name, lens_mm):
+    cd = bpy.data.cameras.new(name)
+    cd.lens = lens_mm
+    cd.sensor_width = 36.0
+    cd.sensor_height = 24.0
+    cd.sensor_fit = 'AUTO'
+    cd.clip_start = 0.05
+    cd.clip_end = 200.0
+    ob = bpy.data.objects.new(name, cd)
+    bpy.context.scene.collection.objects.link(ob)
+    bpy.context.scene.camera = ob
+    return ob
+
+
+def key(ob, frame, **props):
+    for k, v in props.items():
+        setattr(ob, k, v)
+        ob.keyframe_insert(data_path=k, frame=frame)
+
+
+def smooth_fcurves(ob, interpolation='BEZIER'):
+    if ob.animation_data and ob.animation_data.action:
+        for fc in ob.animation_data.action.fcurves:
+            for kp in fc.keyframe_points:
+                kp.interpolation = interpolation
+
+
+# --------------------------------------------------------------------------- #
+# render configuration
+# --------------------------------------------------------------------------- #
+def configure(scene, mode, samples, seed, ao_distance=1.0):
+    scene.frame_start, scene.frame_end = FRAMES
+    r = scene.render
+    r.engine = 'CYCLES'
+    r.resolution_x, r.resolution_y = RES
+    r.resolution_percentage = 100
+    r.pixel_aspect_x = r.pixel_aspect_y = 1.0
+    r.use_border = False
+    r.use_motion_blur = False
+    r.use_persistent_data = False
+    r.threads_mode = 'AUTO'
+    r.film_transparent = False
+    r.use_compositing = False
+    r.use_sequencer = False
+    r.filter_size = 1.5  # Cycles default (Blackman-Harris, 1.5 px)
+    r.use_file_extension = True
+    r.use_overwrite = True
+    r.use_placeholder = False
+
+    im = r.image_settings
+    im.file_format = 'OPEN_EXR_MULTILAYER'
+    im.color_depth = '32'
+    im.exr_codec = 'ZIP'
+    im.use_preview = False
+
+    c = scene.cycles
+    c.device = 'CPU'
+    c.feature_set = 'SUPPORTED'
+    c.samples = samples
+    c.use_adaptive_sampling = False
+    c.use_denoising = False
+    c.use_preview_denoising = False
+    c.seed = seed
+    c.use_animated_seed = False
+    c.pixel_filter_type = 'BLACKMAN_HARRIS'
+    c.filter_width = 1.5
+    c.sample_clamp_direct = 0.0
+    c.sample_clamp_indirect = 0.0
+    c.caustics_reflective = False
+    c.caustics_refractive = False
+    c.blur_glossy = 0.0
+    c.glossy_bounces = 0
+    c.transmission_bounces = 0
+    c.volume_bounces = 0
+    c.transparent_max_bounces = 8
+    c.use_fast_gi = False
+    if hasattr(c, "use_light_tree"):  # Blender >= 3.5
+        c.use_light_tree = False
+    if mode == "main":
+        c.max_bounces = 8
+        c.diffuse_bounces = 8
+    else:
+        c.max_bounces = 1
+        c.diffuse_bounces = 1
+
+    # World > Ambient Occlusion distance drives the AO pass
+    scene.world.light_settings.distance = ao_distance
+    scene.world.light_settings.use_ambient_occlusion = False
+
+    for vl in scene.view_layers:
+        vl.use = False
+    vl = scene.view_layers[0]
+    vl.name = "ViewLayer"
+    vl.use = True
+    main = mode == "main"
+    vl.use_pass_combined = main
+    vl.use_pass_z = True
+    vl.use_pass_mist = False
+    vl.use_pass_normal = main
+    vl.use_pass_position = main
+    vl.use_pass_vector = main
+    vl.use_pass_diffuse_color = True
+    vl.use_pass_diffuse_direct = True
+    vl.use_pass_diffuse_indirect = True
+    vl.use_pass_glossy_color = False
+    vl.use_pass_glossy_direct = False
+    vl.use_pass_glossy_indirect = False
+    vl.use_pass_transmission_color = False
+    vl.use_pass_transmission_direct = False
+    vl.use_pass_transmission_indirect = False
+    vl.use_pass_emit = main
+    vl.use_pass_environment = main
+    vl.use_pass_ambient_occlusion = main
+    vl.use_pass_object_index = False
+    vl.use_pass_material_index = False
+    vl.cycles.denoising_store_passes = False
+    vl.cycles.use_pass_shadow_catcher = False
+    vl.use_pass_cryptomatte_object = False
+
+
+# --------------------------------------------------------------------------- #
+# render loop
+# --------------------------------------------------------------------------- #
+def render_frames(scene, out_dir, frames):
+    out_dir = os.path.abspath(out_dir)
+    os.makedirs(out_dir, exist_ok=True)
+    pattern = os.path.join(out_dir, "frame_####")
+    times = []
+    for f in frames:
+        scene.render.filepath = pattern
+        exr = scene.render.frame_path(frame=f)  # .../frame_0003.exr
+        # write_still does not expand '#': give it the expanded name
+        scene.render.filepath = exr
+        scene.frame_set(f)
+        t0 = time.time()
+        bpy.ops.render.render(write_still=True)
+        dt = time.time() - t0
+        times.append(dt)
+        scene.render.filepath = pattern
+        side = export_camera.write_sidecar(scene, exr, f, bpy.context.evaluated_depsgraph_get())
+        print("HBIL_FRAME scene=%s frame=%d seconds=%.2f samples=%d file=%s sidecar=%s"
+              % (scene.name, f, dt, scene.cycles.samples, exr, os.path.basename(side)),
+              flush=True)
+    if times:
+        print("HBIL_TIMING frames=%d mean_seconds=%.2f total_seconds=%.1f"
+              % (len(times), sum(times) / len(times), sum(times)), flush=True)
+    return times
+
+
+def run(name, build):
+    """Entry point used by the scene scripts: build(scene) creates the scene."""
+    a = parse_args()
+    scene = clear_scene()
+    scene.name = name
+    build(scene)
+    configure(scene, a.mode, a.samples, a.seed)
+    if a.save_blend:
+        bpy.ops.wm.save_as_mainfile(filepath=os.path.abspath(a.save_blend), compress=True)
+    if a.no_render:
+        return
+    if not a.out:
+        raise SystemExit("--out DIR is required to render")
+    render_frames(scene, a.out, export_camera.parse_frames(a.frames))
