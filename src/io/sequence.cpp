@@ -1,0 +1,167 @@
+// sequence.cpp: frame patterns, frame ranges and frame numbers in file names.
+// Syntax and matching rules: see sequence.h.
+#include "io/sequence.h"
+
+#include <algorithm>
+#include <cctype>
+#include <charconv>
+#include <cstdio>
+#include <filesystem>
+#include <system_error>
+
+#include "hbil/error.h"
+
+namespace hbil::io {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+[[noreturn]] void pattern_error(const std::string& pattern, const std::string& why) {
+  throw Error(Exit::usage, "frame pattern \"" + pattern + "\": " + why);
+}
+
+bool all_digits(std::string_view s) {
+  return !s.empty() &&
+         std::all_of(s.begin(), s.end(), [](unsigned char c) { return std::isdigit(c) != 0; });
+}
+
+// Non-negative int from a digit string; nullopt when it does not fit.
+std::optional<int> to_int(std::string_view digits) {
+  int v = 0;
+  auto [end, ec] = std::from_chars(digits.data(), digits.data() + digits.size(), v);
+  if (ec != std::errc() || end != digits.data() + digits.size() || v < 0) return std::nullopt;
+  return v;
+}
+
+}  // namespace
+
+FramePattern::FramePattern(std::string pattern) : text_(std::move(pattern)) {
+  // One pass over the text: collect the literal prefix, the frame field, the suffix.
+  std::string literal;
+  bool have_field = false;
+  size_t field_end_in_text = 0;
+  const std::string& s = text_;
+  for (size_t i = 0; i < s.size();) {
+    if (s[i] == '#') {
+      size_t j = i;
+      while (j < s.size() && s[j] == '#') ++j;
+      if (have_field) pattern_error(s, "more than one frame field ('#' or '%d')");
+      have_field = true;
+      prefix_ = literal;
+      literal.clear();
+      pad_ = int(j - i);
+      field_end_in_text = j;
+      i = j;
+    } else if (s[i] == '%') {
+      if (i + 1 < s.size() && s[i + 1] == '%') {  // "%%": literal percent sign
+        literal += '%';
+        i += 2;
+        continue;
+      }
+      // "%d" or "%0Nd".
+      size_t j = i + 1;
+      int width = 0;
+      if (j < s.size() && s[j] == '0') {
+        ++j;
+        const size_t digits_start = j;
+        while (j < s.size() && std::isdigit(static_cast<unsigned char>(s[j]))) ++j;
+        if (j == digits_start || j - digits_start > 2)
+          pattern_error(s, "expected %d or %0Nd (N = 1..99) at \"" + s.substr(i) + "\"");
+        width = std::stoi(s.substr(digits_start, j - digits_start));
+      }
+      if (j >= s.size() || s[j] != 'd')
+        pattern_error(s, "only %d and %0Nd are allowed (use %% for a literal '%'), found \"" +
+                             s.substr(i, std::min<size_t>(4, s.size() - i)) + "\"");
+      if (have_field) pattern_error(s, "more than one frame field ('#' or '%d')");
+      have_field = true;
+      prefix_ = literal;
+      literal.clear();
+      pad_ = width;
+      field_end_in_text = j + 1;
+      i = j + 1;
+    } else {
+      literal += s[i++];
+    }
+  }
+  if (!have_field) {
+    prefix_ = literal;  // unescaped "%%"
+    suffix_.clear();
+    pad_ = 0;
+    is_sequence_ = false;
+    return;
+  }
+  suffix_ = literal;
+  is_sequence_ = true;
+  if (suffix_.find('/') != std::string::npos || suffix_.find('\\') != std::string::npos ||
+      s.find('/', field_end_in_text) != std::string::npos)
+    pattern_error(s, "the frame field must be in the file name, not in a directory name");
+}
+
+std::string FramePattern::path(int frame) const {
+  if (!is_sequence_) return prefix_;
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%0*d", pad_, frame);  // same as Blender's BLI_path_frame
+  return prefix_ + buf + suffix_;
+}
+
+std::vector<int> FramePattern::existing_frames() const {
+  std::vector<int> frames;
+  std::error_code ec;
+  if (!is_sequence_) {
+    if (fs::is_regular_file(prefix_, ec))
+      frames.push_back(frame_number_from_name(prefix_).value_or(0));
+    return frames;
+  }
+  const fs::path prefix_path(prefix_);
+  // prefix_ = "<dir>/<name start>"; a prefix ending in '/' has an empty name start.
+  const bool ends_with_sep = !prefix_.empty() && (prefix_.back() == '/');
+  const fs::path dir = ends_with_sep ? prefix_path : prefix_path.parent_path();
+  const std::string name_start = ends_with_sep ? "" : prefix_path.filename().string();
+  const std::string dir_prefix = prefix_.substr(0, prefix_.size() - name_start.size());
+  fs::directory_iterator it(dir.empty() ? fs::path(".") : dir, ec);
+  if (ec) return frames;
+  for (const fs::directory_entry& entry : it) {
+    if (!entry.is_regular_file(ec)) continue;
+    const std::string name = entry.path().filename().string();
+    if (name.size() <= name_start.size() + suffix_.size()) continue;
+    if (name.compare(0, name_start.size(), name_start) != 0) continue;
+    if (name.compare(name.size() - suffix_.size(), suffix_.size(), suffix_) != 0) continue;
+    const std::string_view digits = std::string_view(name).substr(
+        name_start.size(), name.size() - name_start.size() - suffix_.size());
+    if (!all_digits(digits)) continue;
+    const std::optional<int> frame = to_int(digits);
+    // The file is frame n exactly when formatting n gives its name back (padding rules).
+    if (frame && path(*frame) == dir_prefix + name) frames.push_back(*frame);
+  }
+  std::sort(frames.begin(), frames.end());
+  frames.erase(std::unique(frames.begin(), frames.end()), frames.end());
+  return frames;
+}
+
+FrameRange parse_frame_range(const std::string& text) {
+  const auto fail = [&](const std::string& why) -> FrameRange {
+    throw Error(Exit::usage, "--frames: \"" + text + "\": " + why +
+                                 " (expected N or A-B with 0 <= A <= B, e.g. 1-8)");
+  };
+  const size_t dash = text.find('-');
+  const std::string a = text.substr(0, dash);
+  const std::string b = dash == std::string::npos ? a : text.substr(dash + 1);
+  if (!all_digits(a) || !all_digits(b)) return fail("not a frame number or range");
+  const std::optional<int> first = to_int(a), last = to_int(b);
+  if (!first || !last) return fail("frame number too large");
+  if (*first > *last) return fail("first frame after last frame");
+  return {*first, *last};
+}
+
+std::optional<int> frame_number_from_name(const std::string& path) {
+  const std::string stem = fs::path(path).stem().string();
+  size_t end = stem.size();
+  while (end > 0 && !std::isdigit(static_cast<unsigned char>(stem[end - 1]))) --end;
+  if (end == 0) return std::nullopt;
+  size_t begin = end;
+  while (begin > 0 && std::isdigit(static_cast<unsigned char>(stem[begin - 1]))) --begin;
+  return to_int(std::string_view(stem).substr(begin, end - begin));
+}
+
+}  // namespace hbil::io
