@@ -1,0 +1,33 @@
+// commands.h: the subcommands of the hbil command line. Each registers its options on a
+// CLI11 subcommand and runs when it is chosen; errors are thrown as hbil::Error and turned
+// into a message and an exit code by main() alone.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+
+#include "hbil/params.h"
+
+namespace hbil::cli {
+
+// Options shared by the commands that take parameters.
+struct ParamOptions {
+  std::string preset;
+  std::vector<std::string> sets;
+  // Shorthands for the most used keys; their help shows the defaults of hbil::Params.
+  double radius = Params{}.radius;
+  int slices = Params{}.slices, steps = Params{}.steps;
+  CLI::Option *radius_opt = nullptr, *slices_opt = nullptr, *steps_opt = nullptr;
+  void add_to(CLI::App& app);
+  // Defaults, then the preset file, then each --set in order. Throws Error(Exit::preset).
+  Params load() const;
+};
+
+void add_run(CLI::App& app);
+void add_info(CLI::App& app);
+void add_compare(CLI::App& app);
+void add_preset(CLI::App& app);
+
+}  // namespace hbil::cli

@@ -1,0 +1,93 @@
+// info.cpp: `hbil info FILE`: what a frame holds and what hbil can compute from it.
+#include <iostream>
+#include <map>
+
+#include "cli/commands.h"
+#include "hbil/error.h"
+#include "io/camera_io.h"
+#include "io/exr_frame.h"
+#include "io/sequence.h"
+
+namespace hbil::cli {
+
+namespace {
+
+std::string join(const std::vector<std::string>& v) {
+  std::string s;
+  for (const auto& x : v) s += (s.empty() ? "" : ", ") + x;
+  return s;
+}
+
+void info(const std::string& path, const ParamOptions& po) {
+  const Params p = po.load();
+  const io::InputFrame f = io::open_frame(path, io::frame_number_from_name(path).value_or(0), p);
+  std::cout << "file: " << path << "\n"
+            << "resolution: " << f.spec.width << "x" << f.spec.height << ", " << f.spec.nchannels << " channels, "
+            << "compression " << f.spec.get_string_attribute("compression", "?") << "\n";
+  if (f.spec.get_string_attribute("compression").rfind("dwa", 0) == 0)
+    std::cout << "warning: DWA compression is lossy on data channels (Normal.Y, Position.Y, ...)\n";
+  std::cout << "view layer: " << (f.view_layer.empty() ? "(none)" : f.view_layer) << "\n";
+
+  // Passes: channel names grouped by everything before their last dot.
+  std::map<std::string, std::vector<std::string>> passes;
+  for (const auto& ch : f.spec.channelnames) {
+    const auto dot = ch.rfind('.');
+    passes[dot == std::string::npos ? "" : ch.substr(0, dot)].push_back(
+        dot == std::string::npos ? ch : ch.substr(dot + 1));
+  }
+  std::cout << "passes:\n";
+  for (const auto& [name, chans] : passes) std::cout << "  " << (name.empty() ? "(no layer)" : name) << ": " << join(chans) << "\n";
+
+  std::cout << "G-buffer fields:\n";
+  for (const auto& field : gbuffer_fields()) {
+    std::cout << "  " << field << ": ";
+    if (f.has(field))
+      std::cout << join(f.wanted.at(field)) << "\n";
+    else
+      std::cout << "absent (looked for " << join(f.wanted.count(field) ? f.wanted.at(field) : std::vector<std::string>{})
+                << ")\n";
+  }
+
+  std::cout << "camera: ";
+  try {
+    GBuffer g;
+    g.width = f.spec.width;
+    g.height = f.spec.height;
+    const Camera c = io::find_camera(f, g, p);
+    std::cout << c.source << "\n  fx " << c.fx << "  fy " << c.fy << "  cx " << c.cx << "  cy " << c.cy;
+    if (c.reprojection_rms_px > 0) std::cout << "\n  reprojection RMS error " << c.reprojection_rms_px << " px";
+    const Vec3d e = c.centre();
+    std::cout << "\n  centre (world) " << e.x << " " << e.y << " " << e.z << "\n";
+  } catch (const Error& e) {
+    std::cout << "not available: " << e.what() << "\n";
+  }
+
+  std::cout << "outputs:\n";
+  for (const auto& o : known_outputs()) {
+    Params one = p;
+    one.outputs = {o};
+    std::cout << "  " << o << ": ";
+    try {
+      std::cout << "yes, from " << join(io::fields_needed(f, one)) << "\n";
+    } catch (const Error& e) {
+      std::cout << "no: " << e.what() << "\n";
+    }
+  }
+}
+
+}  // namespace
+
+void add_info(CLI::App& app) {
+  struct Options {
+    std::string file;
+    ParamOptions params;
+  };
+  auto o = std::make_shared<Options>();
+  CLI::App* cmd = app.add_subcommand("info", "list a frame's passes, the G-buffer fields and camera found, and "
+                                             "which outputs can be computed");
+  cmd->add_option("FILE", o->file, "one EXR frame")->required();
+  o->params.add_to(*cmd);
+  cmd->callback([o] { info(o->file, o->params); });
+}
+
+}  // namespace hbil::cli

@@ -1,0 +1,41 @@
+// main.cpp: the hbil command line. The only place that turns errors into exit codes.
+#include <iostream>
+
+#include <CLI/CLI.hpp>
+#include <OpenImageIO/imageio.h>
+
+#include "cli/commands.h"
+#include "hbil/error.h"
+
+int main(int argc, char** argv) {
+  CLI::App app{"hbil " HBIL_VERSION
+               ": screen-space ambient occlusion, bent cones and indirect light (HBIL) for "
+               "rendered OpenEXR G-buffer sequences"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", "hbil " HBIL_VERSION);
+  hbil::cli::add_run(app);
+  hbil::cli::add_info(app);
+  hbil::cli::add_compare(app);
+  hbil::cli::add_preset(app);
+  // OIIO's own thread pool is not needed: hbil parallelises with TBB.
+  OIIO::attribute("threads", 1);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    app.exit(e);
+    return int(hbil::Exit::usage);
+  } catch (const hbil::Error& e) {
+    std::cerr << "hbil: error: " << e.what() << "\n";
+    return int(e.code());
+  } catch (const std::exception& e) {
+    std::cerr << "hbil: internal error: " << e.what() << "\n";
+    return int(hbil::Exit::failure);
+  }
+  return 0;
+}

@@ -1,0 +1,29 @@
+// ao_frame.h: the per-frame AO and bent-cone chain, from G-buffer to output values.
+//   view-space G-buffer -> horizon search (interleaved or full) -> spatial filter ->
+//   ao (eq. 9-11), bent normal in world space (eq. 4-6), cone cosine (eq. 12).
+#pragma once
+
+#include <vector>
+
+#include "hbil/camera.h"
+#include "hbil/gbuffer.h"
+#include "hbil/params.h"
+
+namespace hbil {
+
+struct AoFrame {
+  int width = 0, height = 0;
+  std::vector<float> ao;        // cosine-weighted visibility (eq. 9), 1 = unoccluded
+  std::vector<Vec3> bent;       // unit bent normal, world space (eq. 4-6)
+  std::vector<float> cone_cos;  // cos of the bent cone's half-angle, 1 − Ω/2π (eq. 12)
+};
+
+// Background pixels get ao = 1, bent = the input normal as stored (zero for Blender's
+// background) and cone_cos = 0 (a full hemisphere).
+AoFrame compute_ao_frame(const GBuffer& g, const Camera& cam, const Params& p);
+
+// The same from an already prepared view-space G-buffer (used by tests and benchmarks).
+AoFrame compute_ao_frame(const ViewGBuffer& v, const std::vector<Vec3>& world_normal,
+                         const Camera& cam, const Params& p);
+
+}  // namespace hbil

@@ -1,0 +1,41 @@
+// gbuffer.cpp: G-buffer to view space.
+#include "hbil/gbuffer.h"
+
+#include <cmath>
+#include <limits>
+
+#include <tbb/parallel_for.h>
+
+namespace hbil {
+
+ViewGBuffer make_view_gbuffer(const GBuffer& g, const Camera& cam, const Params& p) {
+  ViewGBuffer v;
+  v.width = g.width;
+  v.height = g.height;
+  v.position.assign(g.pixels(), Vec3{0, 0, ViewGBuffer::kBackground});
+  v.normal.assign(g.pixels(), Vec3{});
+  const bool from_depth = !g.depth.empty();
+  tbb::parallel_for(0, g.height, [&](int y) {
+    for (int x = 0; x < g.width; ++x) {
+      const size_t i = size_t(y) * g.width + x;
+      if (!g.alpha.empty() && !(g.alpha[i] > 0.f)) continue;
+      const Vec3d n = normalize_or_zero(cam.world_dir_to_view(Vec3d(g.normal[i])));
+      if (n.x == 0 && n.y == 0 && n.z == 0) continue;
+      Vec3d pv;
+      if (from_depth) {
+        if (!(g.depth[i] < p.background_depth)) continue;
+        pv = cam.unproject(x + 0.5, y + 0.5, g.depth[i]);
+      } else {
+        const Vec3& w = g.position[i];
+        if (w.x == 0 && w.y == 0 && w.z == 0) continue;  // Blender background
+        pv = cam.world_to_view(Vec3d(w));
+        if (!(pv.z > 0) || !(pv.z < p.background_depth)) continue;
+      }
+      v.position[i] = Vec3(pv);
+      v.normal[i] = Vec3(n);
+    }
+  });
+  return v;
+}
+
+}  // namespace hbil

@@ -1,0 +1,42 @@
+// gbuffer.h: the G-buffer as read from a frame, and its view-space form for the kernels.
+#pragma once
+
+#include <vector>
+
+#include "hbil/camera.h"
+#include "hbil/params.h"
+#include "hbil/vecmath.h"
+
+namespace hbil {
+
+// Fields as stored by the renderer (Blender: Depth planar, Normal and Position world
+// space). A field that was not read is empty: hbil reads only what the outputs need.
+struct GBuffer {
+  int width = 0, height = 0;
+  std::vector<float> depth;    // planar view depth, world units
+  std::vector<Vec3> normal;    // world space, pixel-filtered (may be shorter than 1)
+  std::vector<Vec3> position;  // world space
+  std::vector<float> alpha;    // coverage; 0 = background
+
+  size_t pixels() const { return size_t(width) * size_t(height); }
+};
+
+// What the horizon search reads: view-space position and unit view-space normal per
+// pixel, rows top-down. A background pixel has position.z = +infinity and a zero normal.
+struct ViewGBuffer {
+  int width = 0, height = 0;
+  std::vector<Vec3> position;
+  std::vector<Vec3> normal;
+
+  size_t pixels() const { return size_t(width) * size_t(height); }
+  bool is_background(size_t i) const { return !(position[i].z < kBackground); }
+  static constexpr float kBackground = 3.0e38f;
+};
+
+// Builds the view-space G-buffer. Position comes from depth when depth was read, else
+// from the world position through the camera. Background: depth >= background_depth,
+// alpha == 0, or a normal of zero length. Normals are renormalised (Blender averages
+// them across silhouettes, so their length can fall to 0.25).
+ViewGBuffer make_view_gbuffer(const GBuffer& g, const Camera& cam, const Params& p);
+
+}  // namespace hbil

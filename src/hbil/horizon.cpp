@@ -1,0 +1,110 @@
+// horizon.cpp: see horizon.h for the paper sections and departures.
+#include "hbil/horizon.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+namespace hbil {
+
+namespace {
+constexpr float kPi = std::numbers::pi_v<float>;
+inline float sgn(float t) { return t < 0.f ? -1.f : 1.f; }
+// Below this |cos| between the sample's normal and the corrected ray the tangent-plane
+// correction is unstable (silhouettes, poles seen side-on) and the sample is used as is.
+constexpr float kGrazing = 0.1f;
+}  // namespace
+
+HorizonConfig make_horizon_config(const Params& p, const Camera& cam) {
+  HorizonConfig c;
+  c.radius = float(p.radius);
+  c.steps = p.steps;
+  c.step_power = float(p.step_power);
+  c.fx = float(cam.fx);
+  c.fy = float(cam.fy);
+  return c;
+}
+
+SliceTerms integrate_slice(float theta0, float theta1, float nx, float ny) {
+  // Antiderivatives of f(θ)|sin θ| that vanish at θ = 0; for θ < 0 the sign flips with
+  // |sin θ| = −sin θ.  ∫_0^θ sin²  = (θ − sin θ cos θ)/2,  ∫_0^θ sin cos = sin² θ / 2.
+  auto terms = [nx, ny](float t) {
+    const float s = std::sin(t), c = std::cos(t), a = sgn(t);
+    const float sin2 = (t - s * c) * 0.5f, sincos = s * s * 0.5f;
+    SliceTerms r;
+    r.ao = a * (nx * sin2 + ny * sincos);  // eq. 11 with the |sin θ| Jacobian
+    r.vis = a * (1.f - c);
+    r.bx = a * sin2;  // eq. 5, likewise
+    r.by = a * sincos;  // eq. 6
+    return r;
+  };
+  const SliceTerms g1 = terms(theta1), g0 = terms(theta0);
+  return {g1.ao - g0.ao, g1.vis - g0.vis, g1.bx - g0.bx, g1.by - g0.by};
+}
+
+PixelSums march_pixel(const SampleView& view, int i, int j, const Vec3& P, const Vec3& n,
+                      const float* phi, int n_slices, float jitter, const HorizonConfig& c) {
+  PixelSums acc;
+  const Vec3 wo = normalize_or_zero(-P);  // ω_o: towards the camera at the view-space origin
+  const Vec3 ray_P = P / P.z;             // P's ray, scaled to z = 1
+  // Screen-space search radius in texels: the world radius at this depth (HBAO, XeGTAO).
+  const float focal = 0.5f * (c.fx + c.fy);
+  // Never beyond the image: a larger radius would only step off screen.
+  const float r_tex = std::min(c.radius * focal / (P.z * float(view.stride)),
+                               std::hypot(float(view.width), float(view.height)));
+  const float r2 = c.radius * c.radius;
+  // Orthonormal basis of the plane orthogonal to ω_o; slice s has D = cos φ e1 + sin φ e2.
+  const Vec3 e1 = normalize_or_zero(Vec3{1, 0, 0} - wo * wo.x);
+  const Vec3 e2 = cross(wo, e1);
+  for (int s = 0; s < n_slices; ++s) {
+    const Vec3 D = e1 * std::cos(phi[s]) + e2 * std::sin(phi[s]);
+    // The screen line of the slice: the image of P + εD, d(u, v)/dε ∝ (fx (D.x − r.x D.z),
+    // fy (D.y − r.y D.z)) with r = P/P.z. Marching along it stays in the slice plane.
+    const float gx = c.fx * (D.x - ray_P.x * D.z), gy = c.fy * (D.y - ray_P.y * D.z);
+    const float gl = std::sqrt(gx * gx + gy * gy);
+    if (!(gl > 0.f)) continue;
+    const float dx = gx / gl, dy = gy / gl;     // unit screen direction, pixels
+    const Vec3 dv{dx / c.fx, dy / c.fy, 0.f};  // change of the z = 1 ray per pixel along it
+    const float nx = dot(n, D), ny = dot(n, wo);  // eq. 2: the normal projected on the slice
+    const float gamma = std::atan2(nx, ny);       // angle of n' from ω_o
+
+    // cos of the highest horizon seen on each side; -1 = nothing found yet.
+    float max_cos[2] = {-1.f, -1.f};
+    if (r_tex >= 1.f) {
+      for (int side = 0; side < 2; ++side) {
+        const float sx = side == 0 ? dx : -dx, sy = side == 0 ? dy : -dy;
+        for (int k = 0; k < c.steps; ++k) {
+          const float u = (float(k) + jitter) / float(c.steps);
+          const float o = 1.f + (r_tex - 1.f) * std::pow(u, c.step_power);
+          const int oi = int(std::floor(sx * o + 0.5f)), oj = int(std::floor(sy * o + 0.5f));
+          if (oi == 0 && oj == 0) continue;
+          const int si = i + oi, sj = j + oj;
+          if (si < 0 || sj < 0 || si >= view.width || sj >= view.height) break;  // screen edge
+          const std::ptrdiff_t k_s = view.index(si, sj);
+          Vec3 S = view.position[k_s];
+          // Move S along its tangent plane onto the ray through the exact point of the line
+          // (see horizon.h): that ray lies in the slice plane.
+          const Vec3 ray = ray_P + dv * (side == 0 ? o : -o) * float(view.stride);
+          const Vec3& n_s = view.normal[k_s];
+          const float denom = dot(ray, n_s);
+          if (std::fabs(denom) > kGrazing * length(ray)) S = ray * (dot(S, n_s) / denom);
+          const Vec3 d3 = S - P;  // background has z = 3e38, n = 0: |d3| > radius
+          const float dist2 = dot(d3, d3);
+          if (!(dist2 < r2) || dist2 <= 0.f) continue;
+          max_cos[side] = std::max(max_cos[side], dot(d3, wo) / std::sqrt(dist2));
+        }
+      }
+    }
+    // §2.1: the horizon never lies below the tangent plane, |θ − γ| <= π/2.
+    float theta1 = std::min(std::acos(std::clamp(max_cos[0], -1.f, 1.f)), gamma + 0.5f * kPi);
+    float theta0 = std::max(-std::acos(std::clamp(max_cos[1], -1.f, 1.f)), gamma - 0.5f * kPi);
+    theta1 = std::max(theta1, theta0);
+    const SliceTerms t = integrate_slice(theta0, theta1, nx, ny);
+    acc.ao += t.ao;
+    acc.vis += t.vis;
+    acc.bent += D * t.bx + wo * t.by;
+  }
+  return acc;
+}
+
+}  // namespace hbil

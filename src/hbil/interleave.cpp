@@ -1,0 +1,121 @@
+// interleave.cpp: see interleave.h.
+#include "hbil/interleave.h"
+
+#include <numbers>
+
+#include <tbb/parallel_for.h>
+
+namespace hbil {
+
+namespace {
+
+constexpr float kPi = std::numbers::pi_v<float>;
+// 4x4 ordered-dither (Bayer) matrix: adjacent pixels get rotations far apart.
+constexpr int kBayer4[16] = {0, 8, 2, 10, 12, 4, 14, 6, 3, 11, 1, 9, 15, 7, 13, 5};
+
+void store(HorizonImage& out, size_t idx, const PixelSums& s, int n_slices) {
+  out.ao[idx] = s.ao / float(n_slices);
+  out.vis[idx] = s.vis / float(2 * n_slices);
+  out.bent[idx] = s.bent / float(n_slices);
+}
+
+HorizonImage blank(const ViewGBuffer& g) {
+  HorizonImage out;
+  out.width = g.width;
+  out.height = g.height;
+  out.ao.assign(g.pixels(), 1.f);
+  out.vis.assign(g.pixels(), 1.f);
+  out.bent.assign(g.pixels(), Vec3{});
+  return out;
+}
+
+}  // namespace
+
+void interleaved_angles(int phase, int slices, float* phi) {
+  for (int s = 0; s < slices; ++s)
+    phi[s] = kPi * (float(16 * s + kBayer4[phase]) + 0.5f) / float(16 * slices);
+}
+
+float interleaved_jitter(int phase) {
+  const int transposed = (phase % 4) * 4 + phase / 4;
+  return (float(kBayer4[transposed]) + 0.5f) / 16.f;
+}
+
+HorizonImage horizon_full(const ViewGBuffer& g, const HorizonConfig& c, int slices) {
+  HorizonImage out = blank(g);
+  std::vector<float> phi(slices);
+  for (int s = 0; s < slices; ++s) phi[s] = kPi * (float(s) + 0.5f) / float(slices);
+  const SampleView view{g.position.data(), g.normal.data(), g.width, g.height, 1, g.width, 1};
+  tbb::parallel_for(0, g.height, [&](int y) {
+    for (int x = 0; x < g.width; ++x) {
+      const size_t i = size_t(y) * g.width + x;
+      if (g.is_background(i)) continue;
+      store(out, i, march_pixel(view, x, y, g.position[i], g.normal[i], phi.data(), slices, 0.5f, c),
+            slices);
+    }
+  });
+  return out;
+}
+
+HorizonImage horizon_interleaved(const ViewGBuffer& g, const HorizonConfig& c, int slices,
+                                 bool copy_subbuffers) {
+  HorizonImage out = blank(g);
+  // Sub-buffer of phase (ox, oy): texel (i, j) is full-resolution pixel (4i + ox, 4j + oy).
+  struct Sub {
+    int ox, oy, w, h;
+    std::vector<Vec3> pos, nrm;  // contiguous copies (empty when reading in place)
+    SampleView view;
+    std::vector<float> phi;
+    float jitter;
+  };
+  std::vector<Sub> subs(16);
+  for (int phase = 0; phase < 16; ++phase) {
+    Sub& s = subs[phase];
+    s.ox = phase % 4;
+    s.oy = phase / 4;
+    s.w = (g.width - s.ox + 3) / 4;
+    s.h = (g.height - s.oy + 3) / 4;
+    s.phi.resize(slices);
+    interleaved_angles(phase, slices, s.phi.data());
+    s.jitter = interleaved_jitter(phase);
+  }
+  // Deinterleave (split depth and normals into the 16 quarter-resolution buffers).
+  tbb::parallel_for(0, 16, [&](int phase) {
+    Sub& s = subs[phase];
+    if (s.w <= 0 || s.h <= 0) return;
+    if (copy_subbuffers) {
+      s.pos.resize(size_t(s.w) * s.h);
+      s.nrm.resize(size_t(s.w) * s.h);
+      for (int j = 0; j < s.h; ++j)
+        for (int i = 0; i < s.w; ++i) {
+          const size_t src = size_t(4 * j + s.oy) * g.width + (4 * i + s.ox);
+          s.pos[size_t(j) * s.w + i] = g.position[src];
+          s.nrm[size_t(j) * s.w + i] = g.normal[src];
+        }
+      s.view = SampleView{s.pos.data(), s.nrm.data(), s.w, s.h, 1, s.w, 4};
+    } else {
+      const size_t first = size_t(s.oy) * g.width + s.ox;
+      s.view = SampleView{g.position.data() + first, g.normal.data() + first, s.w, s.h, 4,
+                          std::ptrdiff_t(4) * g.width, 4};
+    }
+  });
+  // March every sub-buffer row; write results back to full resolution (re-interleave).
+  int rows = 0;
+  std::vector<std::pair<int, int>> tasks;  // (phase, row)
+  for (int phase = 0; phase < 16; ++phase)
+    for (int j = 0; j < subs[phase].h; ++j) tasks.emplace_back(phase, j), ++rows;
+  tbb::parallel_for(0, rows, [&](int task) {
+    const auto [phase, j] = tasks[task];
+    const Sub& s = subs[phase];
+    for (int i = 0; i < s.w; ++i) {
+      const size_t dst = size_t(4 * j + s.oy) * g.width + (4 * i + s.ox);
+      if (g.is_background(dst)) continue;
+      const Vec3& P = copy_subbuffers ? s.pos[size_t(j) * s.w + i] : g.position[dst];
+      const Vec3& n = copy_subbuffers ? s.nrm[size_t(j) * s.w + i] : g.normal[dst];
+      store(out, dst, march_pixel(s.view, i, j, P, n, s.phi.data(), slices, s.jitter, c), slices);
+    }
+  });
+  return out;
+}
+
+}  // namespace hbil

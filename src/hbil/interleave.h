@@ -1,0 +1,43 @@
+// interleave.h: running the horizon search over a whole frame, with or without the 4x4
+// interleaved rendering of HBIL §3.3 (Bavoil & Jansen 2013, "deinterleaved texturing").
+//
+// Interleaved: the view-space G-buffer is split into 16 quarter-resolution sub-buffers, one
+// per position (ox, oy) in the 4x4 block; each sub-buffer marches `slices` directions (the
+// paper: 2, 90° apart) rotated by its own offset, so the 16 pixels of a block together cover
+// 16 * slices evenly spaced directions over [0, π). Samples are taken within the sub-buffer
+// (every 4th pixel, which is what makes it cache-friendly); results are written back to
+// their full-resolution pixels (re-interleaving). The spatial filter then averages each
+// block (spatial_filter.h).
+// Not interleaved (reference runs): every pixel marches all `slices` directions at full
+// resolution, evenly spaced, with no rotation or jitter.
+#pragma once
+
+#include <vector>
+
+#include "hbil/gbuffer.h"
+#include "hbil/horizon.h"
+
+namespace hbil {
+
+// Per-pixel horizon results before the spatial filter: means over the pixel's slices.
+struct HorizonImage {
+  int width = 0, height = 0;
+  std::vector<float> ao;   // cosine-weighted visibility (eq. 9), 1 = unoccluded
+  std::vector<float> vis;  // uniform visibility Ω / 2π
+  std::vector<Vec3> bent;  // mean slice bent vector, view space, not normalised
+};
+
+// Slice angles and step jitter of one of the 16 pixels of the 4x4 block
+// (phase = (y % 4) * 4 + x % 4).
+void interleaved_angles(int phase, int slices, float* phi);
+float interleaved_jitter(int phase);
+
+// Every pixel, all slices, full resolution (Params::interleave = false).
+HorizonImage horizon_full(const ViewGBuffer& g, const HorizonConfig& c, int slices);
+
+// The 4x4 interleaved search. With copy_subbuffers = false the sub-buffers are read in place
+// through strided views (the plain version the tests compare the copying one against).
+HorizonImage horizon_interleaved(const ViewGBuffer& g, const HorizonConfig& c, int slices,
+                                 bool copy_subbuffers = true);
+
+}  // namespace hbil

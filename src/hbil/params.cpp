@@ -1,0 +1,184 @@
+// params.cpp: the parameter table, JSON round trip and validation.
+#include "hbil/params.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "hbil/error.h"
+
+namespace hbil {
+
+using nlohmann::json;
+
+std::map<std::string, json> Params::default_passes() {
+  return {{"depth", "Depth"}, {"normal", "Normal"}, {"position", "Position"}, {"alpha", "Combined.A"}};
+}
+
+bool Params::wants(const std::string& output) const {
+  return std::find(outputs.begin(), outputs.end(), output) != outputs.end();
+}
+
+const std::vector<ParamInfo>& params_table() {
+  static const std::vector<ParamInfo> table = {
+      {"radius", &Params::radius, 1e-6, 1e6, "world units",
+       "AO radius: occluders farther than this from the shaded point are ignored "
+       "(set Cycles' World > Ambient Occlusion > Distance to the same value to compare)"},
+      {"slices", &Params::slices, 1, 64, "per pixel",
+       "slice directions marched per pixel; with interleave the 4x4 block covers 16x this"},
+      {"steps", &Params::steps, 1, 256, "per side", "depth samples along each side of a slice"},
+      {"step_power", &Params::step_power, 1, 4, "exponent",
+       "sample spacing along a slice: offset = radius * ((k + jitter) / steps)^step_power; "
+       "values above 1 sample near occluders more densely"},
+      {"interleave", &Params::interleave, 0, 1, "bool",
+       "4x4 deinterleaved rendering (HBIL 3.3): each pixel marches `slices` directions, "
+       "rotated per pixel of the 4x4 block; false marches all directions at every pixel"},
+      {"spatial_filter", &Params::spatial_filter, 0, 1, "bool",
+       "after re-interleaving, average each pixel with the 4x4 block around it (depth- and "
+       "normal-aware) so that every pixel integrates all 16 x slices directions"},
+      {"depth_tolerance", &Params::depth_tolerance, 0, 1, "relative",
+       "spatial filter: neighbours whose depth differs by more than this fraction are not averaged"},
+      {"background_depth", &Params::background_depth, 1e-6, 1e30, "world units",
+       "depth at or beyond which a pixel is background (Blender writes 1e10)"},
+  };
+  return table;
+}
+
+const std::vector<std::string>& gbuffer_fields() {
+  static const std::vector<std::string> f = {"depth", "normal", "position", "alpha"};
+  return f;
+}
+
+const std::vector<std::string>& known_outputs() {
+  static const std::vector<std::string> o = {"ao", "bentcone"};
+  return o;
+}
+
+json to_json(const Params& p) {
+  json j;
+  for (const ParamInfo& info : params_table()) {
+    std::visit([&](auto m) { j[info.key] = p.*m; }, info.member);
+  }
+  j["view_layer"] = p.view_layer;
+  j["passes"] = p.passes;
+  j["outputs"] = p.outputs;
+  return j;
+}
+
+namespace {
+
+std::string allowed_list(const std::vector<std::string>& v) {
+  std::string s;
+  for (const auto& x : v) s += (s.empty() ? "" : ", ") + x;
+  return s;
+}
+
+[[noreturn]] void fail(const std::string& where, const std::string& msg) {
+  throw Error(Exit::preset, where + ": " + msg);
+}
+
+void read_number(Params& p, const ParamInfo& info, const json& v, const std::string& where) {
+  std::visit(
+      [&](auto m) {
+        using T = std::remove_reference_t<decltype(p.*m)>;
+        if constexpr (std::is_same_v<T, bool>) {
+          if (!v.is_boolean()) fail(where, std::string("key '") + info.key + "' must be true or false, got " + v.dump());
+          p.*m = v.get<bool>();
+        } else if constexpr (std::is_same_v<T, int>) {
+          if (!v.is_number_integer())
+            fail(where, std::string("key '") + info.key + "' must be an integer, got " + v.dump());
+          p.*m = v.get<int>();
+        } else {
+          if (!v.is_number()) fail(where, std::string("key '") + info.key + "' must be a number, got " + v.dump());
+          p.*m = v.get<double>();
+        }
+      },
+      info.member);
+}
+
+}  // namespace
+
+Params params_from_json(const json& j, const std::string& where, Params p) {
+  if (!j.is_object()) fail(where, "a preset must be a JSON object, got " + j.dump());
+  for (auto it = j.begin(); it != j.end(); ++it) {
+    const std::string& key = it.key();
+    const json& v = it.value();
+    auto row = std::find_if(params_table().begin(), params_table().end(),
+                            [&](const ParamInfo& i) { return key == i.key; });
+    if (row != params_table().end()) {
+      read_number(p, *row, v, where);
+    } else if (key == "view_layer") {
+      if (!v.is_string()) fail(where, "key 'view_layer' must be a string, got " + v.dump());
+      p.view_layer = v.get<std::string>();
+    } else if (key == "passes") {
+      if (!v.is_object()) fail(where, "key 'passes' must be an object, got " + v.dump());
+      for (auto pit = v.begin(); pit != v.end(); ++pit) {
+        const auto& fields = gbuffer_fields();
+        if (std::find(fields.begin(), fields.end(), pit.key()) == fields.end())
+          fail(where, "unknown G-buffer field 'passes." + pit.key() + "' (known: " + allowed_list(fields) + ")");
+        const json& c = pit.value();
+        bool ok = c.is_string() || (c.is_array() && !c.empty() &&
+                                    std::all_of(c.begin(), c.end(), [](const json& e) { return e.is_string(); }));
+        if (!ok) fail(where, "key 'passes." + pit.key() + "' must be a pass name or an array of channel names, got " + c.dump());
+        p.passes[pit.key()] = c;
+      }
+    } else if (key == "outputs") {
+      if (!v.is_array()) fail(where, "key 'outputs' must be an array of layer names, got " + v.dump());
+      p.outputs.clear();
+      for (const json& o : v) {
+        if (!o.is_string()) fail(where, "key 'outputs' must hold strings, got " + o.dump());
+        p.outputs.push_back(o.get<std::string>());
+      }
+    } else {
+      std::vector<std::string> keys;
+      for (const auto& i : params_table()) keys.push_back(i.key);
+      keys.insert(keys.end(), {"view_layer", "passes", "outputs"});
+      fail(where, "unknown key '" + key + "' (known: " + allowed_list(keys) + ")");
+    }
+  }
+  validate(p, where);
+  return p;
+}
+
+void validate(const Params& p, const std::string& where) {
+  for (const ParamInfo& info : params_table()) {
+    std::visit(
+        [&](auto m) {
+          using T = std::remove_reference_t<decltype(p.*m)>;
+          if constexpr (!std::is_same_v<T, bool>) {
+            double v = double(p.*m);
+            if (!(v >= info.min && v <= info.max)) {
+              std::ostringstream s;
+              s << "key '" << info.key << "' = " << v << " is out of range [" << info.min << ", " << info.max
+                << "] (" << info.unit << ")";
+              fail(where, s.str());
+            }
+          }
+        },
+        info.member);
+  }
+  if (p.outputs.empty()) fail(where, "key 'outputs' is empty: nothing to compute");
+  for (const auto& o : p.outputs) {
+    const auto& k = known_outputs();
+    if (std::find(k.begin(), k.end(), o) == k.end())
+      fail(where, "unknown output '" + o + "' in 'outputs' (known: " + allowed_list(k) + ")");
+  }
+}
+
+Params apply_set(const Params& p, const std::string& assignment) {
+  const std::string where = "--set " + assignment;
+  auto eq = assignment.find('=');
+  if (eq == std::string::npos || eq == 0) fail(where, "expected key=value");
+  std::string key = assignment.substr(0, eq), text = assignment.substr(eq + 1);
+  json value = json::parse(text, nullptr, /*allow_exceptions=*/false);
+  if (value.is_discarded()) value = text;  // bare words are strings: passes.depth=Depth
+  // A dotted key reaches into an object: "passes.depth" -> {"passes": {"depth": value}}.
+  json patch = value;
+  for (size_t dot = key.rfind('.'); dot != std::string::npos; dot = key.rfind('.')) {
+    patch = json{{key.substr(dot + 1), patch}};
+    key = key.substr(0, dot);
+  }
+  return params_from_json(json{{key, patch}}, where, p);
+}
+
+}  // namespace hbil

@@ -1,0 +1,68 @@
+// params.h: every tunable of hbil in one struct, with its default, unit and range.
+//
+// The default of a parameter is stated once, in the member initialiser below; the
+// table params_table() adds key, unit, range and meaning and drives the JSON round trip,
+// validation, `hbil preset --dump`, the CLI help and the man page. An unknown key or an
+// out-of-range value is an Error(Exit::preset) naming the key, the value and the range.
+#pragma once
+
+#include <map>
+#include <string>
+#include <variant>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+namespace hbil {
+
+struct Params {
+  // --- Horizon search (HBIL §1.3, §2.1) ---
+  double radius = 1.0;       // world units: occluders farther than this are ignored
+  int slices = 2;            // slices per pixel (paper: 2, 90 degrees apart)
+  int steps = 12;            // depth samples per side of a slice
+  double step_power = 2.0;   // sample spacing: offset_k = radius * ((k + jitter) / steps)^power
+  bool interleave = true;    // 4x4 deinterleaved rendering (§3.3); off = every pixel all slices
+  bool spatial_filter = true;  // depth-aware 4x4 filter after re-interleaving
+  double depth_tolerance = 0.05;  // spatial filter: relative depth difference still averaged
+
+  // --- Input ---
+  double background_depth = 1e9;  // depth >= this (Blender: 1e10) is background
+  std::string view_layer;          // "" = detect (the layer holding Depth or Normal)
+  // G-buffer field -> channels. A string names a pass ("Normal" -> <layer>.Normal.X/Y/Z),
+  // or a full channel prefix containing a dot; an array lists exact channel names.
+  std::map<std::string, nlohmann::json> passes = default_passes();
+
+  // --- Output ---
+  std::vector<std::string> outputs = {"ao", "bentcone"};
+
+  static std::map<std::string, nlohmann::json> default_passes();
+  // Number of slice directions one pixel's result integrates (after re-interleaving).
+  int slice_directions() const { return interleave ? 16 * slices : slices; }
+  bool wants(const std::string& output) const;
+};
+
+// One row of the parameter table: the key, what it means, its unit and its range.
+struct ParamInfo {
+  const char* key;
+  std::variant<double Params::*, int Params::*, bool Params::*> member;
+  double min, max;  // inclusive; unused for bool
+  const char* unit;
+  const char* help;
+};
+const std::vector<ParamInfo>& params_table();
+
+// The G-buffer fields a preset may map, and the outputs hbil can write.
+const std::vector<std::string>& gbuffer_fields();
+const std::vector<std::string>& known_outputs();
+
+nlohmann::json to_json(const Params& p);
+// Starts from `base` and applies the keys in j; `where` names the source in errors
+// (a file name, "--set"). Throws Error(Exit::preset).
+Params params_from_json(const nlohmann::json& j, const std::string& where, Params base = {});
+// Applies "key=value" (value parsed as JSON, else taken as a string; dotted keys reach
+// into objects: passes.depth=Depth). Throws Error(Exit::preset).
+Params apply_set(const Params& p, const std::string& assignment);
+// Checks ranges and consistency. Throws Error(Exit::preset).
+void validate(const Params& p, const std::string& where);
+
+}  // namespace hbil

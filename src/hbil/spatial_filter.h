@@ -1,0 +1,20 @@
+// spatial_filter.h: re-interleave filter. After the 4x4 interleaved search each pixel holds
+// only its own `slices` directions; averaging the 4x4 window around it (offsets -1..2, which
+// holds each of the 16 phases exactly once) over pixels of the same surface makes every
+// pixel integrate all 16 x slices directions. HBIL §3.3 leaves this "bilateral recomposition"
+// as future work and relies on TAA instead; a compositing tool must give a usable single
+// frame, so we do it here.
+//
+// Same surface: the neighbour lies within depth_tolerance * z of the centre pixel's tangent
+// plane (a plane distance, not a depth difference, so grazing floors are kept) and its
+// normal is within acos(0.8) ~ 37 degrees of the centre's. Weights are 0 or 1.
+#pragma once
+
+#include "hbil/gbuffer.h"
+#include "hbil/interleave.h"
+
+namespace hbil {
+
+HorizonImage spatial_filter(const ViewGBuffer& g, const HorizonImage& in, float depth_tolerance);
+
+}  // namespace hbil

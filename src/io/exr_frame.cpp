@@ -1,0 +1,228 @@
+// exr_frame.cpp: see exr_frame.h.
+#include "io/exr_frame.h"
+
+#include <cmath>
+#include <filesystem>
+#include <sstream>
+
+#include "hbil/error.h"
+#include "io/camera_io.h"
+
+namespace hbil::io {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+const std::vector<std::string>& field_components(const std::string& field) {
+  static const std::map<std::string, std::vector<std::string>> c = {
+      {"depth", {"Z"}}, {"normal", {"X", "Y", "Z"}}, {"position", {"X", "Y", "Z"}}, {"alpha", {"A"}}};
+  return c.at(field);
+}
+
+std::string InputFrame::where() const { return "frame " + std::to_string(frame) + " (" + path + ")"; }
+
+namespace {
+
+int channel_index(const OIIO::ImageSpec& spec, const std::string& name) {
+  for (int c = 0; c < spec.nchannels; ++c)
+    if (spec.channelnames[c] == name) return c;
+  return -1;
+}
+
+// Candidate channel-name lists for a field, best first.
+std::vector<std::vector<std::string>> candidates(const std::string& field, const json& spec_value,
+                                                 const std::string& layer) {
+  const auto& comps = field_components(field);
+  std::vector<std::vector<std::string>> out;
+  if (spec_value.is_array()) {
+    out.push_back(spec_value.get<std::vector<std::string>>());
+    return out;
+  }
+  const std::string name = spec_value.get<std::string>();
+  const bool single_channel = comps.size() == 1 && name.find('.') != std::string::npos;
+  for (const std::string& prefix : {layer.empty() ? std::string() : layer + ".", std::string()}) {
+    std::vector<std::string> names;
+    for (const auto& comp : comps) names.push_back(prefix + name + (single_channel ? "" : "." + comp));
+    out.push_back(names);
+    if (layer.empty()) break;
+  }
+  return out;
+}
+
+std::string join(const std::vector<std::string>& v, const std::string& sep = ", ") {
+  std::string s;
+  for (const auto& x : v) s += (s.empty() ? "" : sep) + x;
+  return s;
+}
+
+}  // namespace
+
+InputFrame open_frame(const std::string& path, int frame, const Params& p) {
+  InputFrame f;
+  f.path = path;
+  f.frame = frame;
+  if (!fs::exists(path)) throw Error(Exit::input, f.where() + ": file not found");
+  auto in = OIIO::ImageInput::open(path);
+  if (!in) throw Error(Exit::input, f.where() + ": cannot read: " + OIIO::geterror());
+  f.spec = in->spec();
+  in->close();
+  if (f.spec.deep) throw Error(Exit::input, f.where() + ": deep images are not supported");
+
+  // View layer: given, or the prefix of the first channel that ends in .<depth pass>.Z or
+  // .<normal pass>.X (Blender's default is "ViewLayer").
+  f.view_layer = p.view_layer;
+  if (f.view_layer.empty()) {
+    for (const char* field : {"depth", "normal"}) {
+      const json& v = p.passes.at(field);
+      if (!v.is_string()) continue;
+      const std::string tail = "." + v.get<std::string>() + "." + field_components(field)[0];
+      for (const auto& ch : f.spec.channelnames)
+        if (ch.size() > tail.size() && ch.compare(ch.size() - tail.size(), tail.size(), tail) == 0) {
+          f.view_layer = ch.substr(0, ch.size() - tail.size());
+          break;
+        }
+      if (!f.view_layer.empty()) break;
+    }
+  }
+  for (const auto& field : gbuffer_fields()) {
+    auto it = p.passes.find(field);
+    if (it == p.passes.end()) continue;
+    const auto cands = candidates(field, it->second, f.view_layer);
+    f.wanted[field] = cands.front();
+    for (const auto& names : cands) {
+      std::vector<int> idx;
+      for (const auto& n : names) idx.push_back(channel_index(f.spec, n));
+      if (std::find(idx.begin(), idx.end(), -1) == idx.end()) {
+        f.channels[field] = idx;
+        f.wanted[field] = names;
+        break;
+      }
+    }
+  }
+  return f;
+}
+
+std::vector<std::string> fields_needed(const InputFrame& f, const Params& p) {
+  std::vector<std::string> need;
+  const bool geometry = p.wants("ao") || p.wants("bentcone");
+  if (geometry) {
+    if (!f.has("normal"))
+      throw Error(Exit::missing_pass, f.where() + ": missing pass: normal (looked for channels " +
+                                          join(f.wanted.at("normal")) + "; map it with passes.normal)");
+    if (f.has("depth"))
+      need.push_back("depth");
+    else if (f.has("position"))
+      need.push_back("position");
+    else
+      throw Error(Exit::missing_pass, f.where() + ": missing pass: depth or position (looked for " +
+                                          join(f.wanted.at("depth")) + " and " + join(f.wanted.at("position")) +
+                                          "; map them with passes.depth / passes.position)");
+    need.push_back("normal");
+  }
+  if (f.has("alpha")) need.push_back("alpha");
+  return need;
+}
+
+namespace {
+
+// Reads the channels of one field as interleaved floats.
+std::vector<float> read_channels(OIIO::ImageInput& in, const InputFrame& f, const std::vector<int>& idx) {
+  const int w = f.spec.width, h = f.spec.height, n = int(idx.size());
+  std::vector<float> out(size_t(w) * h * n);
+  const bool contiguous = [&] {
+    for (int k = 1; k < n; ++k)
+      if (idx[k] != idx[0] + k) return false;
+    return true;
+  }();
+  auto fail = [&](int c) {
+    throw Error(Exit::input, f.where() + ": cannot read channel " + f.spec.channelnames[c] + ": " + in.geterror());
+  };
+  if (contiguous) {
+    if (!in.read_image(0, 0, idx[0], idx[0] + n, OIIO::TypeDesc::FLOAT, out.data())) fail(idx[0]);
+  } else {
+    std::vector<float> one(size_t(w) * h);
+    for (int k = 0; k < n; ++k) {
+      if (!in.read_image(0, 0, idx[k], idx[k] + 1, OIIO::TypeDesc::FLOAT, one.data())) fail(idx[k]);
+      for (size_t i = 0; i < one.size(); ++i) out[i * n + k] = one[i];
+    }
+  }
+  return out;
+}
+
+[[noreturn]] void bad_value(const InputFrame& f, int channel, size_t i, float v, const std::string& what) {
+  std::ostringstream s;
+  s << f.where() << ": layer " << f.spec.channelnames[channel] << ": " << what << " at pixel ("
+    << i % f.spec.width << ", " << i / f.spec.width << "): " << v;
+  throw Error(Exit::bad_data, s.str());
+}
+
+}  // namespace
+
+GBuffer read_fields(const InputFrame& f, const std::vector<std::string>& fields, const Params& p) {
+  GBuffer g;
+  g.width = f.spec.width;
+  g.height = f.spec.height;
+  auto in = OIIO::ImageInput::open(f.path);
+  if (!in) throw Error(Exit::input, f.where() + ": cannot read: " + OIIO::geterror());
+  for (const auto& field : fields) {
+    const std::vector<int>& idx = f.channels.at(field);
+    std::vector<float> v = read_channels(*in, f, idx);
+    if (field == "depth") {
+      for (size_t i = 0; i < v.size(); ++i) {
+        if (!std::isfinite(v[i])) bad_value(f, idx[0], i, v[i], "non-finite depth");
+        if (v[i] < 0) bad_value(f, idx[0], i, v[i], "negative depth");
+      }
+      g.depth = std::move(v);
+    } else if (field == "alpha") {
+      g.alpha = std::move(v);
+    } else {
+      std::vector<Vec3>& dst = field == "normal" ? g.normal : g.position;
+      dst.resize(g.pixels());
+      for (size_t i = 0; i < g.pixels(); ++i) {
+        for (int k = 0; k < 3; ++k)
+          if (!std::isfinite(v[3 * i + k])) bad_value(f, idx[k], i, v[3 * i + k], "non-finite " + field);
+        dst[i] = {v[3 * i], v[3 * i + 1], v[3 * i + 2]};
+      }
+    }
+  }
+  return g;
+}
+
+Camera find_camera(const InputFrame& f, GBuffer& g, const Params& p, double max_rms_px) {
+  Camera cam;
+  const std::string sidecar = sidecar_path_for(f.path);
+  if (fs::exists(sidecar)) {
+    cam = camera_from_sidecar(sidecar);
+  } else if (auto attr = camera_from_exr_attributes(f.spec)) {
+    cam = *attr;
+  } else if (f.has("position")) {
+    if (g.position.empty()) g.position = read_fields(f, {"position"}, p).position;
+    try {
+      cam = solve_camera_from_positions(g.width, g.height, g.position);
+    } catch (const Error& e) {
+      throw Error(e.code(), f.where() + ": " + e.what());
+    }
+    if (cam.reprojection_rms_px > max_rms_px) {
+      std::ostringstream s;
+      s << f.where() << ": the camera solved from " << join(f.wanted.at("position"))
+        << " reprojects with an RMS error of " << cam.reprojection_rms_px << " px (allowed: " << max_rms_px
+        << " px); provide a camera sidecar " << sidecar << " (samples/blender/export_camera.py writes it)";
+      throw Error(Exit::camera, s.str());
+    }
+  } else {
+    throw Error(Exit::camera, f.where() + ": no camera: none of a sidecar " + sidecar +
+                                  " (samples/blender/export_camera.py writes it), the EXR attributes "
+                                  "worldToCamera and worldToNDC (" +
+                                  camera_attribute_status(f.spec) + "), or a Position pass (looked for " +
+                                  join(f.wanted.at("position")) + ") to solve it from");
+  }
+  if (cam.width != f.spec.width || cam.height != f.spec.height) {
+    std::ostringstream s;
+    s << f.where() << ": camera " << cam.source << " is for " << cam.width << "x" << cam.height
+      << " but the image is " << f.spec.width << "x" << f.spec.height;
+    throw Error(Exit::camera, s.str());
+  }
+  return cam;
+}
+
+}  // namespace hbil::io

@@ -1,0 +1,60 @@
+// exr_frame.h: one input frame of a G-buffer sequence: its header, where each G-buffer
+// field lives among its channels, reading only the fields asked for, and its camera.
+//
+// Channel lookup (Blender 3.4 multilayer EXR, see FACTS.md): channels are named
+// <ViewLayer>.<Pass>.<chan> and stored alphabetically, so they are always looked up by
+// name, once per frame. Params::passes maps each field to a pass name ("Normal" ->
+// <layer>.Normal.X/Y/Z), to a name with a dot ("Combined.A", tried with and without the
+// layer prefix), or to an explicit list of channel names (other renderers).
+#pragma once
+
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <OpenImageIO/imageio.h>
+
+#include "hbil/camera.h"
+#include "hbil/gbuffer.h"
+#include "hbil/params.h"
+
+namespace hbil::io {
+
+// Channel suffixes of each G-buffer field, in order.
+const std::vector<std::string>& field_components(const std::string& field);
+
+struct InputFrame {
+  std::string path;
+  int frame = 0;
+  OIIO::ImageSpec spec;
+  std::string view_layer;                                   // "" when channels have no layer
+  std::map<std::string, std::vector<int>> channels;         // field -> channel indices (present fields only)
+  std::map<std::string, std::vector<std::string>> wanted;  // field -> channel names looked for
+
+  bool has(const std::string& field) const { return channels.count(field) > 0; }
+  // "frame 3 (shot/frame_0003.exr)": the context every error message starts with.
+  std::string where() const;
+};
+
+// Opens the header and resolves the channels. Throws Error(Exit::input) when the file is
+// missing or not a readable image.
+InputFrame open_frame(const std::string& path, int frame, const Params& p);
+
+// The fields the requested outputs need, given what the frame holds: AO and bent cones need
+// depth (or, without it, position) and normal; alpha is read when present. Throws
+// Error(Exit::missing_pass) naming the channels looked for.
+std::vector<std::string> fields_needed(const InputFrame& f, const Params& p);
+
+// Reads the given fields (all must be present). Checks the data: a depth that is not finite
+// or negative, or a non-finite normal or position, is Error(Exit::bad_data) naming the
+// frame, file, channel, pixel and value. Background (depth >= background_depth) is allowed.
+GBuffer read_fields(const InputFrame& f, const std::vector<std::string>& fields, const Params& p);
+
+// The camera of a frame, in the order: sidecar next to the file, EXR worldToCamera and
+// worldToNDC attributes, solved from the Position pass (read here when `g` lacks it). A
+// solved camera whose RMS reprojection error exceeds max_rms_px is Error(Exit::camera);
+// with no source at all the error says what to provide.
+Camera find_camera(const InputFrame& f, GBuffer& g, const Params& p, double max_rms_px = 0.5);
+
+}  // namespace hbil::io

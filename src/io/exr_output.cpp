@@ -1,0 +1,110 @@
+// exr_output.cpp: see exr_output.h.
+#include "io/exr_output.h"
+
+#include <unistd.h>
+
+#include <atomic>
+#include <filesystem>
+
+#include <nlohmann/json.hpp>
+
+#include "hbil/error.h"
+#include "io/camera_io.h"
+
+namespace hbil::io {
+
+namespace fs = std::filesystem;
+
+OutputImage make_output(const AoFrame& f, const Params& p) {
+  OutputImage img;
+  img.width = f.width;
+  img.height = f.height;
+  for (const auto& o : p.outputs) {
+    if (o == "ao") img.channels.push_back("ao.Y");
+    if (o == "bentcone") img.channels.insert(img.channels.end(), {"bentcone.X", "bentcone.Y", "bentcone.Z", "bentcone.W"});
+  }
+  const size_t n = img.channels.size(), pixels = size_t(f.width) * f.height;
+  img.pixels.resize(pixels * n);
+  for (size_t i = 0; i < pixels; ++i) {
+    float* px = &img.pixels[i * n];
+    for (const auto& o : p.outputs) {
+      if (o == "ao") *px++ = f.ao[i];
+      if (o == "bentcone") {
+        *px++ = f.bent[i].x;
+        *px++ = f.bent[i].y;
+        *px++ = f.bent[i].z;
+        *px++ = f.cone_cos[i];
+      }
+    }
+  }
+  return img;
+}
+
+std::string camera_json(const Camera& c) {
+  nlohmann::json j;
+  j["source"] = c.source;
+  j["resolution"] = {c.width, c.height};
+  j["fx"] = c.fx;
+  j["fy"] = c.fy;
+  j["cx"] = c.cx;
+  j["cy"] = c.cy;
+  j["world_to_view_R"] = {{c.R.m[0][0], c.R.m[0][1], c.R.m[0][2]},
+                          {c.R.m[1][0], c.R.m[1][1], c.R.m[1][2]},
+                          {c.R.m[2][0], c.R.m[2][1], c.R.m[2][2]}};
+  j["world_to_view_t"] = {c.t.x, c.t.y, c.t.z};
+  j["view_convention"] = "x right, y down, z forward; raster (col+0.5, row+0.5)";
+  if (c.reprojection_rms_px > 0) j["reprojection_rms_px"] = c.reprojection_rms_px;
+  return j.dump();
+}
+
+std::string write_temporary(const std::string& final_path, const OutputImage& img,
+                            const OIIO::ImageSpec& input_header, const Params& p, const Camera& cam) {
+  const fs::path final_p(final_path);
+  std::error_code ec;
+  if (final_p.has_parent_path()) {
+    fs::create_directories(final_p.parent_path(), ec);
+    if (ec) throw Error(Exit::output, final_path + ": cannot create folder " + final_p.parent_path().string() + ": " + ec.message());
+  }
+  static std::atomic<int> counter{0};
+  const fs::path tmp = final_p.parent_path() / ("." + final_p.stem().string() + ".hbil-tmp-" +
+                                                std::to_string(getpid()) + "-" + std::to_string(counter++) + ".exr");
+  OIIO::ImageSpec spec(img.width, img.height, int(img.channels.size()), OIIO::TypeDesc::FLOAT);
+  spec.channelnames = img.channels;
+  spec.alpha_channel = -1;
+  spec.z_channel = -1;
+  // The input's metadata first (stamp, cycles.*, ...), minus what describes its storage.
+  for (const OIIO::ParamValue& a : input_header.extra_attribs) {
+    const std::string name = a.name().string();
+    if (name.rfind("oiio:", 0) == 0 || name.rfind("openexr:", 0) == 0 || name == "compression" ||
+        name == "channelformats" || name == "worldtocamera" || name == "worldtoNDC" || name == "worldToCamera" ||
+        name == "worldToNDC" || name.rfind("hbil:", 0) == 0)
+      continue;
+    spec.attribute(name, a.type(), a.data());
+  }
+  spec.attribute("compression", "zip");
+  spec.attribute("hbil:version", HBIL_VERSION);
+  spec.attribute("hbil:preset", to_json(p).dump());
+  spec.attribute("hbil:camera", camera_json(cam));
+  set_camera_attributes(spec, cam);
+
+  auto out = OIIO::ImageOutput::create(tmp.string());
+  if (!out) throw Error(Exit::output, final_path + ": cannot create an EXR writer: " + OIIO::geterror());
+  if (!out->open(tmp.string(), spec) || !out->write_image(OIIO::TypeDesc::FLOAT, img.pixels.data()) ||
+      !out->close()) {
+    const std::string why = out->geterror();
+    fs::remove(tmp, ec);
+    throw Error(Exit::output, final_path + ": cannot write: " + why);
+  }
+  return tmp.string();
+}
+
+void commit(const std::string& temporary, const std::string& final_path) {
+  std::error_code ec;
+  fs::rename(temporary, final_path, ec);
+  if (ec) {
+    fs::remove(temporary, ec);
+    throw Error(Exit::output, final_path + ": cannot rename the finished frame into place: " + ec.message());
+  }
+}
+
+}  // namespace hbil::io

@@ -1,0 +1,43 @@
+// exr_output.h: writing hbil's multi-layer EXR frames.
+//
+// One single-part scanline EXR per frame, ZIP compressed, 32-bit float, channels named
+// <layer>.<chan> (ao.Y, bentcone.X/Y/Z/W). The input's header attributes are copied
+// through; hbil adds hbil:version, hbil:preset (the effective parameters as JSON),
+// hbil:camera (the camera used, JSON) and the standard worldToCamera / worldToNDC.
+// Frames are written to a hidden temporary file in the output folder and renamed into
+// place only by commit(), so no reader ever sees a partial frame and a failed run leaves
+// what was there before.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <OpenImageIO/imageio.h>
+
+#include "hbil/ao_frame.h"
+#include "hbil/camera.h"
+#include "hbil/params.h"
+
+namespace hbil::io {
+
+struct OutputImage {
+  int width = 0, height = 0;
+  std::vector<std::string> channels;
+  std::vector<float> pixels;  // interleaved, channels.size() per pixel, rows top-down
+};
+
+// The requested layers of an AO frame, in the order of Params::outputs.
+OutputImage make_output(const AoFrame& f, const Params& p);
+
+// The camera as the JSON stored in hbil:camera.
+std::string camera_json(const Camera& c);
+
+// Writes `img` to a temporary file beside `final_path` (creating its folder) and returns
+// the temporary's path. Throws Error(Exit::output).
+std::string write_temporary(const std::string& final_path, const OutputImage& img,
+                            const OIIO::ImageSpec& input_header, const Params& p, const Camera& cam);
+
+// Renames a temporary into place (replacing an older file). Throws Error(Exit::output).
+void commit(const std::string& temporary, const std::string& final_path);
+
+}  // namespace hbil::io
