@@ -320,14 +320,16 @@ def render_frames(scene, out_dir, frames):
         # write_still does not expand '#': give it the expanded name
         scene.render.filepath = exr
         scene.frame_set(f)
-        t0 = time.time()
+        t0, c0 = time.time(), time.process_time()
         bpy.ops.render.render(write_still=True)
         dt = time.time() - t0
+        cpu = time.process_time() - c0  # CPU seconds of all render threads
         times.append(dt)
         scene.render.filepath = pattern
         side = export_camera.write_sidecar(scene, exr, f, bpy.context.evaluated_depsgraph_get())
-        print("HBIL_FRAME scene=%s frame=%d seconds=%.2f samples=%d file=%s sidecar=%s"
-              % (scene.name, f, dt, scene.cycles.samples, exr, os.path.basename(side)),
+        print("HBIL_FRAME scene=%s frame=%d seconds=%.2f cpu_seconds=%.2f samples=%d "
+              "file=%s sidecar=%s"
+              % (scene.name, f, dt, cpu, scene.cycles.samples, exr, os.path.basename(side)),
               flush=True)
     if times:
         print("HBIL_TIMING frames=%d mean_seconds=%.2f total_seconds=%.1f"
