@@ -68,7 +68,7 @@ void info(const std::string& path, const ParamOptions& po) {
     one.outputs = {o};
     std::cout << "  " << o << ": ";
     try {
-      std::cout << "yes, from " << join(io::fields_needed(f, one)) << "\n";
+      std::cout << "yes, from " + join(io::fields_needed(f, one)) + "\n";  // throws before printing
     } catch (const Error& e) {
       std::cout << "no: " << e.what() << "\n";
     }
