@@ -1,0 +1,406 @@
+// cli_test.cpp: the hbil binary end to end: exit codes, messages, the files it writes and
+// the files it must leave alone.
+//
+// Each test works in its own temporary folder and runs HBIL_BINARY on the room_poles
+// sample (256x144, two frames take well under a second) or on copies of it with a pass
+// removed or a pixel broken. A failing run must leave its output folder exactly as it was:
+// every failure test puts a sentinel out_0001.exr there first and compares the folder
+// byte for byte afterwards.
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <limits>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "hbil/error.h"
+#include "hbil/params.h"
+#include "test_util.h"
+
+namespace hbil {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+using test::contains;
+using test::Pixels;
+using test::q;
+using test::RunResult;
+using test::TempDir;
+
+constexpr int kSampleW = 256, kSampleH = 144;
+// AO with the camera solved from Position against AO with the sidecar camera (RMS, AO
+// units). The solve reprojects within 0.001 px on this sample; measured RMS 2e-6.
+constexpr double kSolvedCameraAoRmse = 1e-3;
+
+const std::vector<std::string> kOutputChannels = {"ao.Y", "bentcone.X", "bentcone.Y", "bentcone.Z",
+                                                  "bentcone.W"};
+
+std::string sample(int frame, const std::string& ext = ".exr") {
+  char name[32];
+  std::snprintf(name, sizeof name, "/frame_%04d", frame);
+  return test::kRoomPoles + name + ext;
+}
+
+// Every file below `dir` with its bytes.
+std::map<std::string, std::string> snapshot(const fs::path& dir) {
+  std::map<std::string, std::string> s;
+  for (const auto& e : fs::recursive_directory_iterator(dir))
+    if (e.is_regular_file()) s[fs::relative(e.path(), dir).string()] = test::read_text(e.path());
+  return s;
+}
+
+class Cli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (!fs::exists(sample(1)) || !fs::exists(sample(2)))
+      GTEST_SKIP() << "samples/room_poles frames 1-2 are absent";
+    fs::create_directories(dir.path() / "in");
+    fs::create_directories(dir.path() / "out");
+  }
+
+  RunResult hbil(const std::string& args) { return test::run_hbil(args, dir.path()); }
+  std::string path(const std::string& rel) const { return dir / rel; }
+
+  // in/frame_000N.exr (+ sidecar) copied from the sample.
+  void copy_frame(int n, bool sidecar = true) {
+    const std::string base = path("in") + sample(n, "").substr(test::kRoomPoles.size());
+    fs::copy_file(sample(n), base + ".exr");
+    if (sidecar) fs::copy_file(sample(n, ".camera.json"), base + ".camera.json");
+  }
+  std::string in_frame(int n, const std::string& ext = ".exr") const {
+    return path("in") + sample(n, ext).substr(test::kRoomPoles.size());
+  }
+
+  // Puts a sentinel out_0001.exr into out/, runs, and checks the exit code, that stderr
+  // holds every needle, and that out/ is byte-identical afterwards (no output, no
+  // temporaries).
+  RunResult expect_failure(const std::string& args, Exit code,
+                           std::initializer_list<std::string> needles) {
+    test::write_text(path("out/out_0001.exr"), "previous output, must survive a failed run\n");
+    const auto before = snapshot(path("out"));
+    const RunResult r = hbil(args);
+    EXPECT_EQ(r.code, int(code)) << "stderr: " << r.err;
+    for (const auto& n : needles)
+      EXPECT_TRUE(contains(r.err, n)) << "stderr \"" << r.err << "\" lacks \"" << n << "\"";
+    EXPECT_EQ(snapshot(path("out")), before) << "a failed run changed the output folder";
+    return r;
+  }
+
+  TempDir dir{test::test_name()};
+};
+
+std::string run_args(const std::string& in_pattern, const std::string& out_pattern,
+                     const std::string& extra = "") {
+  return "run " + q(in_pattern) + " -o " + q(out_pattern) + " " + extra;
+}
+
+TEST_F(Cli, RunWritesLayersAndMetadata) {
+  const RunResult r = hbil(
+      run_args(test::kRoomPoles + "/frame_####.exr", path("out/out_####.exr"), "--frames 1-2"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(contains(r.err, "frame 1 (1/2)")) << r.err;
+  EXPECT_TRUE(contains(r.err, "camera: sidecar frame_0002.camera.json")) << r.err;
+  EXPECT_EQ(snapshot(path("out")).size(), 2u) << "exactly out_0001.exr and out_0002.exr";
+  EXPECT_TRUE(test::files_containing(dir.path(), ".hbil-tmp").empty());
+
+  for (int frame : {1, 2}) {
+    SCOPED_TRACE(frame);
+    const std::string out = path("out/out_000" + std::to_string(frame) + ".exr");
+    const Pixels px = test::read_pixels(out);
+    ASSERT_EQ(px.spec.width, kSampleW);
+    ASSERT_EQ(px.spec.height, kSampleH);
+    std::vector<std::string> names(px.spec.channelnames.begin(), px.spec.channelnames.end());
+    EXPECT_EQ(names, kOutputChannels);
+    EXPECT_TRUE(px.spec.format == OIIO::TypeDesc::FLOAT) << px.spec.format.c_str();
+
+    // Metadata: the effective preset, the version, the camera, the input's stamp.
+    const json preset = json::parse(px.spec.get_string_attribute("hbil:preset"));
+    EXPECT_EQ(preset, to_json(Params{}));
+    EXPECT_EQ(px.spec.get_string_attribute("hbil:version"), HBIL_VERSION);
+    const json cam = json::parse(px.spec.get_string_attribute("hbil:camera"));
+    EXPECT_EQ(cam["source"], "sidecar frame_000" + std::to_string(frame) + ".camera.json");
+    EXPECT_EQ(cam["resolution"], json::array({kSampleW, kSampleH}));
+    EXPECT_NEAR(cam["fx"].get<double>(), 20.0 / 36.0 * kSampleW,
+                1e-6);  // lens / sensor width * width
+    EXPECT_NE(px.spec.find_attribute("worldtocamera"), nullptr);
+    EXPECT_NE(px.spec.find_attribute("worldtoNDC"), nullptr);
+    EXPECT_EQ(px.spec.get_string_attribute("Camera"), "Camera");
+    EXPECT_EQ(px.spec.get_string_attribute("Scene"), "room_poles");
+    EXPECT_EQ(px.spec.get_string_attribute("Frame"), std::to_string(frame));
+    EXPECT_EQ(px.spec.get_string_attribute("compression"), "zip");
+
+    // Values: AO in [0, 1] with real occlusion somewhere; bent normals unit length where
+    // the AO is defined; cone cosines in [0, 1].
+    double ao_min = 1, ao_max = 0;
+    size_t unit = 0;
+    for (int y = 0; y < kSampleH; ++y)
+      for (int x = 0; x < kSampleW; ++x) {
+        const float ao = px.at(x, y, 0), bx = px.at(x, y, 1), by = px.at(x, y, 2),
+                    bz = px.at(x, y, 3), w = px.at(x, y, 4);
+        ASSERT_TRUE(std::isfinite(ao) && std::isfinite(bx) && std::isfinite(by) &&
+                    std::isfinite(bz) && std::isfinite(w))
+            << x << "," << y;
+        ASSERT_GE(ao, 0.f);
+        ASSERT_LE(ao, 1.f);
+        ASSERT_GE(w, 0.f);
+        ASSERT_LE(w, 1.f);
+        ao_min = std::min<double>(ao_min, ao);
+        ao_max = std::max<double>(ao_max, ao);
+        unit += std::abs(std::sqrt(bx * bx + by * by + bz * bz) - 1.f) < 1e-3f;
+      }
+    EXPECT_LT(ao_min, 0.5) << "corners and pole feet are occluded";
+    EXPECT_GT(ao_max, 0.9) << "open floor is nearly unoccluded";
+    EXPECT_GT(unit, size_t(kSampleW * kSampleH) * 9 / 10) << "bent normals are unit vectors";
+  }
+}
+
+TEST_F(Cli, ThreadCountDoesNotChangeBytes) {
+  std::vector<std::string> outs;
+  for (int threads : {1, 2, 3}) {
+    const std::string out = path("out/t" + std::to_string(threads) + "_####.exr");
+    const RunResult r = hbil(run_args(test::kRoomPoles + "/frame_####.exr", out,
+                                      "--frames 1-2 -q --threads " + std::to_string(threads)));
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_EQ(r.err, "") << "-q prints nothing";
+    outs.push_back(path("out/t" + std::to_string(threads) + "_"));
+  }
+  for (const char* frame : {"0001.exr", "0002.exr"}) {
+    const Pixels a = test::read_pixels(outs[0] + frame);
+    ASSERT_EQ(a.data.size(), size_t(kSampleW) * kSampleH * kOutputChannels.size());
+    const std::string bytes = test::read_text(outs[0] + frame);
+    for (size_t k = 1; k < outs.size(); ++k) {
+      SCOPED_TRACE(outs[k] + frame);
+      const Pixels b = test::read_pixels(outs[k] + frame);
+      ASSERT_EQ(a.data.size(), b.data.size());
+      EXPECT_EQ(std::memcmp(a.data.data(), b.data.data(), a.data.size() * sizeof(float)), 0);
+      EXPECT_TRUE(test::read_text(outs[k] + frame) == bytes) << "files differ";
+    }
+  }
+}
+
+TEST_F(Cli, SequenceWithoutSidecarsSolvesTheCamera) {
+  copy_frame(1, /*sidecar=*/false);
+  copy_frame(2, /*sidecar=*/false);
+  const RunResult r = hbil(run_args(path("in/frame_####.exr"), path("out/solved_####.exr")));
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(contains(r.err, "camera: solved from Position")) << r.err;
+  EXPECT_TRUE(contains(r.err, "2 frames")) << r.err;
+  ASSERT_EQ(hbil(run_args(test::kRoomPoles + "/frame_####.exr", path("out/sidecar_####.exr"),
+                          "--frames 1-2"))
+                .code,
+            0);
+  for (const char* frame : {"0001.exr", "0002.exr"}) {
+    SCOPED_TRACE(frame);
+    const Pixels solved = test::read_pixels(path("out/solved_") + frame);
+    const Pixels truth = test::read_pixels(path("out/sidecar_") + frame);
+    const json cam = json::parse(solved.spec.get_string_attribute("hbil:camera"));
+    EXPECT_TRUE(contains(cam["source"].get<std::string>(), "solved from Position")) << cam.dump();
+    EXPECT_LT(cam["reprojection_rms_px"].get<double>(), 0.5);
+    ASSERT_EQ(solved.data.size(), truth.data.size());
+    double se = 0;
+    for (int y = 0; y < kSampleH; ++y)
+      for (int x = 0; x < kSampleW; ++x) se += std::pow(solved.at(x, y, 0) - truth.at(x, y, 0), 2);
+    const double rmse = std::sqrt(se / (kSampleW * kSampleH));
+    EXPECT_LT(rmse, kSolvedCameraAoRmse)
+        << "AO with the solved camera differs from AO with the true one";
+  }
+}
+
+// --- Failures: exit code, a message naming the file and frame, nothing written --------
+
+TEST_F(Cli, MissingPassFailsWithoutOutput) {
+  copy_frame(1);
+  test::copy_exr(sample(2), in_frame(2), {"ViewLayer.Normal."});
+  expect_failure(run_args(path("in/frame_####.exr"), path("out/out_####.exr")), Exit::missing_pass,
+                 {"hbil: error: ", "frame 2", in_frame(2), "ViewLayer.Normal.X"});
+}
+
+TEST_F(Cli, NonFiniteDepthFailsWithoutOutput) {
+  copy_frame(1);
+  test::copy_exr(sample(2), in_frame(2), {}, [](Pixels& p) {
+    p.at(10, 20, p.channel("ViewLayer.Depth.Z")) = std::numeric_limits<float>::quiet_NaN();
+  });
+  fs::copy_file(sample(2, ".camera.json"), in_frame(2, ".camera.json"));
+  expect_failure(run_args(path("in/frame_####.exr"), path("out/out_####.exr")), Exit::bad_data,
+                 {"frame 2", in_frame(2), "ViewLayer.Depth.Z", "non-finite", "(10, 20)"});
+}
+
+TEST_F(Cli, NegativeDepthFailsWithoutOutput) {
+  copy_frame(1);
+  test::copy_exr(sample(2), in_frame(2), {},
+                 [](Pixels& p) { p.at(200, 100, p.channel("ViewLayer.Depth.Z")) = -2.5f; });
+  fs::copy_file(sample(2, ".camera.json"), in_frame(2, ".camera.json"));
+  expect_failure(
+      run_args(path("in/frame_####.exr"), path("out/out_####.exr")), Exit::bad_data,
+      {"frame 2", in_frame(2), "ViewLayer.Depth.Z", "negative depth", "(200, 100)", "-2.5"});
+}
+
+TEST_F(Cli, ResolutionChangeFailsWithoutOutput) {
+  copy_frame(1);
+  test::crop_exr(sample(2), in_frame(2), 128, 72);
+  expect_failure(run_args(path("in/frame_####.exr"), path("out/out_####.exr")), Exit::bad_data,
+                 {"frame 2", in_frame(2), "128x72", "256x144", in_frame(1)});
+}
+
+TEST_F(Cli, MissingInputFrameFailsWithoutOutput) {
+  copy_frame(1);
+  copy_frame(2);
+  expect_failure(run_args(path("in/frame_####.exr"), path("out/out_####.exr"), "--frames 1-3"),
+                 Exit::input, {"frame 3", in_frame(3), "not found"});
+}
+
+TEST_F(Cli, NoCameraFailsWithoutOutput) {
+  test::copy_exr(sample(1), in_frame(1), {"ViewLayer.Position."});
+  expect_failure(run_args(in_frame(1), path("out/out_0001.exr")), Exit::camera,
+                 {"frame 1", in_frame(1), "no camera", in_frame(1, ".camera.json")});
+}
+
+TEST_F(Cli, UnknownPresetKeyIsExit7) {
+  copy_frame(1);
+  test::write_text(path("bad_preset.json"), R"({"radius": 0.5, "radiuss": 2})");
+  expect_failure(
+      run_args(in_frame(1), path("out/out_0001.exr"), "--preset " + q(path("bad_preset.json"))),
+      Exit::preset, {path("bad_preset.json"), "unknown key 'radiuss'"});
+  test::write_text(path("broken.json"), R"({"radius": )");
+  expect_failure(
+      run_args(in_frame(1), path("out/out_0001.exr"), "--preset " + q(path("broken.json"))),
+      Exit::preset, {path("broken.json"), "not valid JSON"});
+}
+
+TEST_F(Cli, BadSetIsExit7) {
+  copy_frame(1);
+  expect_failure(run_args(in_frame(1), path("out/out_0001.exr"), "--set slices=0"), Exit::preset,
+                 {"--set slices=0", "'slices'", "[1, 64]"});
+  expect_failure(run_args(in_frame(1), path("out/out_0001.exr"), "--set nosuchkey=1"), Exit::preset,
+                 {"unknown key 'nosuchkey'"});
+  expect_failure(run_args(in_frame(1), path("out/out_0001.exr"), "--radius -1"), Exit::preset,
+                 {"'radius'"});
+}
+
+TEST_F(Cli, UnknownOptionIsUsageError) {
+  copy_frame(1);
+  expect_failure(run_args(in_frame(1), path("out/out_0001.exr"), "--bogus"), Exit::usage,
+                 {"--bogus"});
+  expect_failure("frobnicate", Exit::usage, {"subcommand"});
+  expect_failure(run_args(in_frame(1), path("out/out_0001.exr"), "--frames 2-1"), Exit::usage,
+                 {"--frames"});
+}
+
+TEST_F(Cli, OutputEqualToInputIsUsageError) {
+  copy_frame(1);
+  copy_frame(2);
+  const auto before = snapshot(path("in"));
+  expect_failure(run_args(in_frame(1), in_frame(1)), Exit::usage,
+                 {in_frame(1), "overwrite its own input"});
+  expect_failure(run_args(path("in/frame_####.exr"), path("in/frame_%04d.exr")), Exit::usage,
+                 {"overwrite its own input"});
+  EXPECT_EQ(snapshot(path("in")), before);
+}
+
+TEST_F(Cli, UnwritableOutputFolderIsExit8) {
+  copy_frame(1);
+  test::write_text(path("out/blocker"), "a regular file where a folder should be\n");
+  expect_failure(run_args(in_frame(1), path("out/blocker/out_0001.exr")), Exit::output,
+                 {path("out/blocker")});
+  EXPECT_TRUE(test::files_containing(dir.path(), ".hbil-tmp").empty());
+}
+
+// --- info, compare, preset ----------------------------------------------------------
+
+TEST_F(Cli, InfoListsPassesCameraAndOutputs) {
+  const RunResult r = hbil("info " + q(sample(1)));
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(contains(r.out, "resolution: 256x144")) << r.out;
+  EXPECT_TRUE(contains(r.out, "view layer: ViewLayer")) << r.out;
+  EXPECT_TRUE(contains(r.out, "ViewLayer.Depth: Z")) << r.out;
+  EXPECT_TRUE(contains(r.out, "depth: ViewLayer.Depth.Z")) << r.out;
+  EXPECT_TRUE(contains(r.out, "camera: sidecar frame_0001.camera.json")) << r.out;
+  EXPECT_TRUE(contains(r.out, "ao: yes")) << r.out;
+  EXPECT_TRUE(contains(r.out, "bentcone: yes")) << r.out;
+
+  // Without Normal (and without a sidecar): the outputs cannot be computed and info says
+  // why, exit 0 all the same; the camera is solved from Position.
+  test::copy_exr(sample(1), in_frame(1), {"ViewLayer.Normal."});
+  const RunResult n = hbil("info " + q(in_frame(1)));
+  ASSERT_EQ(n.code, 0) << n.err;
+  EXPECT_TRUE(contains(n.out, "ao: no")) << n.out;
+  EXPECT_TRUE(contains(n.out, "normal: absent (looked for ViewLayer.Normal.X")) << n.out;
+  EXPECT_TRUE(contains(n.out, "bentcone: no: frame 1")) << n.out;
+  EXPECT_FALSE(contains(n.out, "yes, from")) << "no output is listed as computable:\n" << n.out;
+  EXPECT_TRUE(contains(n.out, "camera: solved from Position")) << n.out;
+
+  const RunResult missing = hbil("info " + q(path("in/none.exr")));
+  EXPECT_EQ(missing.code, int(Exit::input)) << missing.err;
+  EXPECT_TRUE(contains(missing.err, path("in/none.exr"))) << missing.err;
+}
+
+TEST_F(Cli, CompareAgainstItselfAndAgainstCycles) {
+  const std::string out = path("out/out_0001.exr");
+  ASSERT_EQ(hbil(run_args(sample(1), out, "-q")).code, 0);
+
+  const RunResult self = hbil("compare " + q(out) + " " + q(out) + " --layer ao");
+  ASSERT_EQ(self.code, 0) << self.err;
+  EXPECT_TRUE(contains(self.out, "overall")) << self.out;
+  EXPECT_TRUE(contains(self.out, "0.00000")) << self.out;
+  EXPECT_TRUE(contains(self.out, "inf")) << self.out;
+
+  const RunResult js = hbil("compare " + q(out) + " " + q(out) + " --layer bentcone --json");
+  ASSERT_EQ(js.code, 0) << js.err;
+  json j;
+  ASSERT_NO_THROW(j = json::parse(js.out)) << js.out;
+  EXPECT_EQ(j["overall"]["rmse"].get<double>(), 0.0);
+  EXPECT_EQ(j["overall"]["psnr"], "inf");
+  EXPECT_EQ(j["overall"]["pixels"].get<size_t>(), size_t(4) * kSampleW * kSampleH);
+  EXPECT_EQ(j["channels"].size(), 4u);
+
+  const RunResult cy =
+      hbil("compare " + q(out) + " " + q(sample(1)) + " --layer ao --ref-layer AO --json");
+  ASSERT_EQ(cy.code, 0) << cy.err;
+  j = json::parse(cy.out);
+  ASSERT_TRUE(j["overall"]["psnr"].is_number()) << j.dump();
+  const double psnr = j["overall"]["psnr"].get<double>();
+  EXPECT_GT(psnr, 10.0);
+  EXPECT_LT(psnr, 40.0);
+  EXPECT_GT(j["overall"]["rmse"].get<double>(), 0.0);
+  EXPECT_EQ(j["mask"], "ViewLayer.Depth.Z < background");
+  ASSERT_EQ(j["channels"].size(), 3u);
+  EXPECT_EQ(j["channels"][0]["reference"], "ViewLayer.AO.R");
+
+  const RunResult missing = hbil("compare " + q(out) + " " + q(sample(1)) + " --layer gi");
+  EXPECT_EQ(missing.code, int(Exit::missing_pass)) << missing.err;
+  EXPECT_TRUE(contains(missing.err, "no layer 'gi'")) << missing.err;
+}
+
+TEST_F(Cli, PresetDumpAppliesSet) {
+  const RunResult r = hbil("preset --dump --set radius=2");
+  ASSERT_EQ(r.code, 0) << r.err;
+  json j;
+  ASSERT_NO_THROW(j = json::parse(r.out)) << r.out;
+  EXPECT_EQ(j["radius"].get<double>(), 2.0);
+  Params expected;
+  expected.radius = 2;
+  EXPECT_EQ(j, to_json(expected));
+
+  // --set wins over the shorthand; a preset file sits under both.
+  test::write_text(path("p.json"), R"({"slices": 4, "radius": 7})");
+  const RunResult s =
+      hbil("preset --dump --preset " + q(path("p.json")) + " --radius 3 --set radius=0.25");
+  ASSERT_EQ(s.code, 0) << s.err;
+  j = json::parse(s.out);
+  EXPECT_EQ(j["radius"].get<double>(), 0.25);
+  EXPECT_EQ(j["slices"].get<int>(), 4);
+
+  EXPECT_EQ(hbil("preset").code, int(Exit::usage));
+  EXPECT_EQ(hbil("preset --dump --set radius=0").code, int(Exit::preset));
+}
+
+}  // namespace
+}  // namespace hbil

@@ -1,0 +1,339 @@
+// exr_frame_test.cpp: channel lookup, reading only the needed fields, data checks and the
+// camera sources of one input frame (io/exr_frame.h).
+//
+// Small synthetic multilayer EXRs with Blender 3.4 channel names are written per test;
+// the Position solve uses the real room_poles frame 1 without its sidecar.
+
+#include "io/exr_frame.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "hbil/error.h"
+#include "io/camera_io.h"
+#include "test_util.h"
+
+namespace hbil::io {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+using test::contains;
+using test::expect_error;
+using test::TempDir;
+
+constexpr int kW = 24, kH = 16;
+constexpr double kSolvedRmsPx = 0.5;      // what find_camera accepts by default
+constexpr double kSolvedFocalRel = 0.01;  // solved fx, fy against the sidecar's
+
+// Blender-like G-buffer channels of one view layer, in the order written.
+std::vector<std::string> blender_channels(const std::string& layer, bool normal = true,
+                                          bool position = true, bool alpha = true) {
+  std::vector<std::string> c;
+  if (alpha) c.insert(c.end(), {"Combined.R", "Combined.G", "Combined.B", "Combined.A"});
+  c.push_back("Depth.Z");
+  if (normal) c.insert(c.end(), {"Normal.X", "Normal.Y", "Normal.Z"});
+  if (position) c.insert(c.end(), {"Position.X", "Position.Y", "Position.Z"});
+  c.insert(c.end(), {"AO.R", "AO.G", "AO.B"});
+  for (auto& s : c) s = layer + "." + s;
+  return c;
+}
+
+// Distinct, exactly representable values per field so that a mix-up shows.
+float depth_at(int x, int y) {
+  return 2.0f + 0.25f * x + 0.125f * y;
+}
+Vec3 normal_at(int x, int y) {
+  return {0.0625f * x, -0.5f, 0.03125f * y};
+}
+Vec3 position_at(int x, int y) {
+  return {float(x), float(y), 100.0f};
+}
+
+float value_for(const std::string& name, int x, int y) {
+  auto ends = [&](const char* t) { return name.ends_with(t); };
+  if (ends("Depth.Z")) return depth_at(x, y);
+  if (ends("Normal.X")) return normal_at(x, y).x;
+  if (ends("Normal.Y")) return normal_at(x, y).y;
+  if (ends("Normal.Z")) return normal_at(x, y).z;
+  if (ends("Position.X")) return position_at(x, y).x;
+  if (ends("Position.Y")) return position_at(x, y).y;
+  if (ends("Position.Z")) return position_at(x, y).z;
+  if (ends("Combined.A")) return x < kW / 2 ? 1.0f : 0.5f;
+  return 0.25f;
+}
+
+void write_gbuffer(const std::string& path, const std::vector<std::string>& channels, int w = kW,
+                   int h = kH) {
+  test::write_exr(path, w, h, channels,
+                  [&](int x, int y, int c) { return value_for(channels[c], x, y); });
+}
+
+class ExrFrame : public ::testing::Test {
+ protected:
+  TempDir dir{test::test_name()};
+  std::string file(const std::string& name) const { return dir / name; }
+};
+
+TEST_F(ExrFrame, DetectsTheViewLayerAndResolvesEveryField) {
+  const std::string path = file("frame_0007.exr");
+  write_gbuffer(path, blender_channels("MyLayer"));
+  const InputFrame f = open_frame(path, 7, Params{});
+  EXPECT_EQ(f.view_layer, "MyLayer");
+  EXPECT_EQ(f.spec.width, kW);
+  EXPECT_EQ(f.spec.height, kH);
+  for (const char* field : {"depth", "normal", "position", "alpha"})
+    EXPECT_TRUE(f.has(field)) << field;
+  EXPECT_EQ(f.wanted.at("depth"), std::vector<std::string>{"MyLayer.Depth.Z"});
+  EXPECT_EQ(f.wanted.at("normal"),
+            (std::vector<std::string>{"MyLayer.Normal.X", "MyLayer.Normal.Y", "MyLayer.Normal.Z"}));
+  EXPECT_EQ(f.wanted.at("alpha"), std::vector<std::string>{"MyLayer.Combined.A"});
+  for (const auto& [field, idx] : f.channels)
+    for (size_t k = 0; k < idx.size(); ++k)
+      EXPECT_EQ(f.spec.channelnames[idx[k]], f.wanted.at(field)[k]) << field;
+  EXPECT_EQ(f.where(), "frame 7 (" + path + ")");
+}
+
+TEST_F(ExrFrame, GivenViewLayerSelectsAmongSeveral) {
+  const std::string path = file("two_layers.exr");
+  auto channels = blender_channels("Back");
+  for (const auto& c : blender_channels("Front")) channels.push_back(c);
+  write_gbuffer(path, channels);
+  Params p;
+  p.view_layer = "Front";
+  const InputFrame f = open_frame(path, 1, p);
+  EXPECT_EQ(f.view_layer, "Front");
+  EXPECT_EQ(f.spec.channelnames[f.channels.at("depth")[0]], "Front.Depth.Z");
+  EXPECT_EQ(f.spec.channelnames[f.channels.at("normal")[2]], "Front.Normal.Z");
+}
+
+TEST_F(ExrFrame, PresetMapsChannelsOfAnotherRenderer) {
+  // No view layer, short names, normal mapped by an explicit list in reversed order so
+  // that it is read channel by channel.
+  const std::string path = file("other.exr");
+  const std::vector<std::string> channels = {"N.X", "N.Y", "N.Z", "R", "G", "B", "Z"};
+  test::write_exr(path, kW, kH, channels, [&](int x, int y, int c) {
+    const Vec3 n = normal_at(x, y);
+    switch (c) {
+      case 0:
+        return n.x;
+      case 1:
+        return n.y;
+      case 2:
+        return n.z;
+      case 6:
+        return depth_at(x, y);
+      default:
+        return 0.5f;
+    }
+  });
+  Params p = apply_set(Params{}, R"(passes.normal=["N.Z","N.Y","N.X"])");
+  p = apply_set(p, R"(passes.depth=["Z"])");
+  const InputFrame f = open_frame(path, 3, p);
+  EXPECT_EQ(f.view_layer, "");
+  ASSERT_TRUE(f.has("normal"));
+  ASSERT_TRUE(f.has("depth"));
+  EXPECT_FALSE(f.has("position"));
+  EXPECT_FALSE(f.has("alpha"));
+  const auto need = fields_needed(f, p);
+  EXPECT_EQ(need, (std::vector<std::string>{"depth", "normal"}));
+  const GBuffer g = read_fields(f, need, p);
+  ASSERT_EQ(g.depth.size(), size_t(kW * kH));
+  ASSERT_EQ(g.normal.size(), size_t(kW * kH));
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x) {
+      const size_t i = size_t(y) * kW + x;
+      ASSERT_EQ(g.depth[i], depth_at(x, y)) << x << "," << y;
+      const Vec3 n = normal_at(x, y);
+      ASSERT_EQ(g.normal[i].x, n.z) << x << "," << y;  // reversed by the mapping
+      ASSERT_EQ(g.normal[i].y, n.y) << x << "," << y;
+      ASSERT_EQ(g.normal[i].z, n.x) << x << "," << y;
+    }
+}
+
+TEST_F(ExrFrame, MissingNormalNamesFrameFileAndChannel) {
+  const std::string path = file("frame_0005.exr");
+  write_gbuffer(path, blender_channels("ViewLayer", /*normal=*/false));
+  const Params p;
+  const InputFrame f = open_frame(path, 5, p);
+  EXPECT_FALSE(f.has("normal"));
+  expect_error([&] { fields_needed(f, p); }, Exit::missing_pass,
+               {"frame 5", path, "ViewLayer.Normal.X", "ViewLayer.Normal.Y", "ViewLayer.Normal.Z",
+                "passes.normal"});
+}
+
+TEST_F(ExrFrame, MissingDepthFallsBackToPosition) {
+  const std::string path = file("frame_0001.exr");
+  auto channels = blender_channels("ViewLayer");
+  std::erase(channels, "ViewLayer.Depth.Z");
+  write_gbuffer(path, channels);
+  const Params p;
+  const InputFrame f = open_frame(path, 1, p);
+  EXPECT_EQ(f.view_layer, "ViewLayer") << "detected from Normal when Depth is absent";
+  EXPECT_EQ(fields_needed(f, p), (std::vector<std::string>{"position", "normal", "alpha"}));
+}
+
+TEST_F(ExrFrame, MissingDepthAndPositionIsMissingPass) {
+  const std::string path = file("frame_0002.exr");
+  auto channels = blender_channels("ViewLayer", true, /*position=*/false);
+  std::erase(channels, "ViewLayer.Depth.Z");
+  write_gbuffer(path, channels);
+  const Params p;
+  const InputFrame f = open_frame(path, 2, p);
+  expect_error([&] { fields_needed(f, p); }, Exit::missing_pass,
+               {"frame 2", path, "ViewLayer.Depth.Z", "ViewLayer.Position.X"});
+}
+
+TEST_F(ExrFrame, NonFiniteDepthNamesFileFrameChannelAndPixel) {
+  const std::string path = file("frame_0009.exr");
+  const auto channels = blender_channels("ViewLayer");
+  test::write_exr(path, kW, kH, channels, [&](int x, int y, int c) {
+    if (channels[c] == "ViewLayer.Depth.Z" && x == 5 && y == 3)
+      return std::numeric_limits<float>::quiet_NaN();
+    return value_for(channels[c], x, y);
+  });
+  const Params p;
+  const InputFrame f = open_frame(path, 9, p);
+  expect_error([&] { read_fields(f, fields_needed(f, p), p); }, Exit::bad_data,
+               {"frame 9", path, "ViewLayer.Depth.Z", "non-finite depth", "pixel (5, 3)", "nan"});
+}
+
+TEST_F(ExrFrame, NegativeDepthNamesFileFrameChannelAndPixel) {
+  const std::string path = file("frame_0010.exr");
+  const auto channels = blender_channels("ViewLayer");
+  test::write_exr(path, kW, kH, channels, [&](int x, int y, int c) {
+    if (channels[c] == "ViewLayer.Depth.Z" && x == kW - 1 && y == kH - 1) return -0.75f;
+    return value_for(channels[c], x, y);
+  });
+  const Params p;
+  const InputFrame f = open_frame(path, 10, p);
+  expect_error(
+      [&] { read_fields(f, fields_needed(f, p), p); }, Exit::bad_data,
+      {"frame 10", path, "ViewLayer.Depth.Z", "negative depth", "pixel (23, 15)", "-0.75"});
+}
+
+TEST_F(ExrFrame, InfiniteNormalIsBadData) {
+  const std::string path = file("frame_0011.exr");
+  const auto channels = blender_channels("ViewLayer");
+  test::write_exr(path, kW, kH, channels, [&](int x, int y, int c) {
+    if (channels[c] == "ViewLayer.Normal.Y" && x == 0 && y == 1)
+      return std::numeric_limits<float>::infinity();
+    return value_for(channels[c], x, y);
+  });
+  const Params p;
+  const InputFrame f = open_frame(path, 11, p);
+  expect_error([&] { read_fields(f, fields_needed(f, p), p); }, Exit::bad_data,
+               {"frame 11", path, "ViewLayer.Normal.Y", "pixel (0, 1)", "inf"});
+}
+
+TEST_F(ExrFrame, BackgroundDepthIsAccepted) {
+  const std::string path = file("bg.exr");
+  const auto channels = blender_channels("ViewLayer");
+  test::write_exr(path, kW, kH, channels, [&](int x, int y, int c) {
+    if (channels[c] == "ViewLayer.Depth.Z" && y == 0) return 1e10f;
+    return value_for(channels[c], x, y);
+  });
+  const Params p;
+  const InputFrame f = open_frame(path, 1, p);
+  const GBuffer g = read_fields(f, fields_needed(f, p), p);
+  EXPECT_EQ(g.depth[3], 1e10f);
+}
+
+TEST_F(ExrFrame, ReadsOnlyTheNeededFields) {
+  const std::string path = file("frame_0001.exr");
+  write_gbuffer(path, blender_channels("ViewLayer"));
+  test::write_sidecar(file("frame_0001.camera.json"), kW, kH);
+  const Params p;
+  const InputFrame f = open_frame(path, 1, p);
+  ASSERT_TRUE(f.has("position"));
+  const auto need = fields_needed(f, p);
+  EXPECT_EQ(need, (std::vector<std::string>{"depth", "normal", "alpha"}));
+  GBuffer g = read_fields(f, need, p);
+  EXPECT_EQ(g.width, kW);
+  EXPECT_EQ(g.height, kH);
+  EXPECT_EQ(g.depth.size(), g.pixels());
+  EXPECT_EQ(g.normal.size(), g.pixels());
+  EXPECT_EQ(g.alpha.size(), g.pixels());
+  EXPECT_TRUE(g.position.empty());
+  EXPECT_EQ(g.depth[size_t(3) * kW + 4], depth_at(4, 3));
+  EXPECT_EQ(g.normal[size_t(5) * kW + 7].x, normal_at(7, 5).x);
+  EXPECT_EQ(g.normal[size_t(5) * kW + 7].z, normal_at(7, 5).z);
+  EXPECT_EQ(g.alpha[size_t(2) * kW + kW - 1], 0.5f);
+
+  const Camera cam = find_camera(f, g, p);
+  EXPECT_TRUE(contains(cam.source, "sidecar frame_0001.camera.json")) << cam.source;
+  EXPECT_EQ(cam.width, kW);
+  EXPECT_EQ(cam.height, kH);
+  EXPECT_TRUE(g.position.empty()) << "a sidecar camera must not read Position";
+
+  // Without an alpha mapping, alpha is neither resolved nor read.
+  Params no_alpha = p;
+  no_alpha.passes.erase("alpha");
+  const InputFrame f2 = open_frame(path, 1, no_alpha);
+  EXPECT_EQ(fields_needed(f2, no_alpha), (std::vector<std::string>{"depth", "normal"}));
+}
+
+TEST_F(ExrFrame, SidecarOfAnotherResolutionIsCameraError) {
+  const std::string path = file("frame_0001.exr");
+  write_gbuffer(path, blender_channels("ViewLayer"));
+  test::write_sidecar(file("frame_0001.camera.json"), 2 * kW, 2 * kH);
+  const Params p;
+  const InputFrame f = open_frame(path, 1, p);
+  GBuffer g = read_fields(f, fields_needed(f, p), p);
+  expect_error([&] { find_camera(f, g, p); }, Exit::camera, {"frame 1", path, "48x32", "24x16"});
+}
+
+TEST_F(ExrFrame, NoCameraSourceSaysWhatToProvide) {
+  const std::string path = file("frame_0004.exr");
+  write_gbuffer(path, blender_channels("ViewLayer", true, /*position=*/false));
+  const Params p;
+  const InputFrame f = open_frame(path, 4, p);
+  GBuffer g = read_fields(f, fields_needed(f, p), p);
+  expect_error([&] { find_camera(f, g, p); }, Exit::camera,
+               {"frame 4", path, "no camera", sidecar_path_for(path), "worldToCamera",
+                "ViewLayer.Position.X"});
+}
+
+TEST_F(ExrFrame, MissingOrUnreadableFileIsInputError) {
+  const std::string missing = file("nope_0001.exr");
+  expect_error([&] { open_frame(missing, 1, Params{}); }, Exit::input,
+               {"frame 1", missing, "not found"});
+  const std::string text = file("text_0002.exr");
+  test::write_text(text, "this is not an image\n");
+  expect_error([&] { open_frame(text, 2, Params{}); }, Exit::input,
+               {"frame 2", text, "cannot read"});
+}
+
+TEST_F(ExrFrame, CameraSolvedFromPositionWithoutSidecar) {
+  const std::string src = test::kRoomPoles + "/frame_0001.exr";
+  if (!fs::exists(src)) GTEST_SKIP() << src << " is absent";
+  const std::string path = file("frame_0001.exr");
+  fs::copy_file(src, path);
+  ASSERT_FALSE(fs::exists(sidecar_path_for(path)));
+  const Params p;
+  const InputFrame f = open_frame(path, 1, p);
+  GBuffer g = read_fields(f, fields_needed(f, p), p);
+  ASSERT_TRUE(g.position.empty());
+  const Camera cam = find_camera(f, g, p);
+  EXPECT_EQ(g.position.size(), g.pixels()) << "Position is read for the solve";
+  EXPECT_TRUE(contains(cam.source, "solved from Position")) << cam.source;
+  EXPECT_GT(cam.reprojection_rms_px, 0.0);
+  EXPECT_LT(cam.reprojection_rms_px, kSolvedRmsPx);
+  const Camera ref = camera_from_sidecar(test::kRoomPoles + "/frame_0001.camera.json");
+  EXPECT_NEAR(cam.fx, ref.fx, kSolvedFocalRel * ref.fx);
+  EXPECT_NEAR(cam.fy, ref.fy, kSolvedFocalRel * ref.fy);
+  EXPECT_NEAR(cam.cx, ref.cx, 1.0);
+  EXPECT_NEAR(cam.cy, ref.cy, 1.0);
+  const Vec3d c = cam.centre(), rc = ref.centre();
+  EXPECT_NEAR(c.x, rc.x, 0.01);
+  EXPECT_NEAR(c.y, rc.y, 0.01);
+  EXPECT_NEAR(c.z, rc.z, 0.01);
+}
+
+}  // namespace
+}  // namespace hbil::io

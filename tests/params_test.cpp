@@ -1,0 +1,271 @@
+// params_test.cpp: the parameter table, its JSON round trip, validation errors, --set
+// assignments and the shipped presets.
+
+#include "hbil/params.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "hbil/error.h"
+#include "test_util.h"
+
+namespace hbil {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+using test::expect_error;
+
+// A parameter set that differs from the defaults in every kind of key.
+Params non_default() {
+  Params p;
+  p.radius = 0.37;
+  p.slices = 3;
+  p.steps = 7;
+  p.step_power = 1.5;
+  p.interleave = false;
+  p.spatial_filter = false;
+  p.depth_tolerance = 0.125;
+  p.background_depth = 5e9;
+  p.view_layer = "RenderLayer";
+  p.passes["normal"] = json::array({"N.x", "N.y", "N.z"});
+  p.passes["depth"] = "Z";
+  p.outputs = {"bentcone"};
+  return p;
+}
+
+TEST(Params, DefaultsAreValidAndWithinTheirRanges) {
+  EXPECT_NO_THROW(validate(Params{}, "defaults"));
+  const json d = to_json(Params{});
+  for (const ParamInfo& info : params_table()) {
+    ASSERT_TRUE(d.contains(info.key)) << info.key;
+    if (!d[info.key].is_boolean()) {
+      EXPECT_GE(d[info.key].get<double>(), info.min) << info.key;
+      EXPECT_LE(d[info.key].get<double>(), info.max) << info.key;
+    }
+  }
+  EXPECT_EQ(d["radius"], 1.0);
+  EXPECT_EQ(d["outputs"], json::array({"ao", "bentcone"}));
+  EXPECT_EQ(d["passes"]["depth"], "Depth");
+  EXPECT_EQ(d["passes"]["normal"], "Normal");
+  EXPECT_EQ(d["view_layer"], "");
+}
+
+TEST(Params, JsonRoundTripIsIdentity) {
+  for (const Params& p : {Params{}, non_default()}) {
+    const json j = to_json(p);
+    EXPECT_EQ(to_json(params_from_json(j, "round trip")), j);
+    // Through text too, as a preset file or hbil:preset is stored.
+    EXPECT_EQ(to_json(params_from_json(json::parse(j.dump()), "text")), j);
+  }
+  const Params back = params_from_json(to_json(non_default()), "round trip");
+  EXPECT_EQ(back.radius, 0.37);
+  EXPECT_EQ(back.slices, 3);
+  EXPECT_FALSE(back.interleave);
+  EXPECT_EQ(back.view_layer, "RenderLayer");
+  EXPECT_EQ(back.passes.at("normal"), json::array({"N.x", "N.y", "N.z"}));
+  EXPECT_EQ(back.outputs, std::vector<std::string>{"bentcone"});
+  EXPECT_EQ(back.slice_directions(), 3);
+}
+
+TEST(Params, PartialJsonKeepsTheBase) {
+  Params base;
+  base.slices = 5;
+  const Params p = params_from_json(json{{"radius", 2.5}}, "partial", base);
+  EXPECT_EQ(p.radius, 2.5);
+  EXPECT_EQ(p.slices, 5);
+  EXPECT_EQ(p.steps, Params{}.steps);
+  // An integer is accepted for a double key.
+  EXPECT_EQ(params_from_json(json{{"radius", 3}}, "int").radius, 3.0);
+}
+
+TEST(Params, UnknownKeyNamesTheKeyAndTheSource) {
+  expect_error(
+      [] {
+        params_from_json(json{{"radiuss", 1.0}}, "shot/fast.json");
+      },
+      Exit::preset, {"shot/fast.json", "unknown key 'radiuss'", "radius", "passes"});
+  expect_error(
+      [] {
+        params_from_json(json{{"passes", {{"velocity", "Vector"}}}}, "p.json");
+      },
+      Exit::preset, {"p.json", "passes.velocity", "depth, normal, position, alpha"});
+  expect_error(
+      [] {
+        params_from_json(json::array({1, 2}), "p.json");
+      },
+      Exit::preset, {"p.json", "JSON object"});
+}
+
+TEST(Params, OutOfRangeNamesKeyValueAndRange) {
+  expect_error(
+      [] {
+        params_from_json(json{{"slices", 0}}, "a.json");
+      },
+      Exit::preset, {"a.json", "'slices'", "= 0", "[1, 64]"});
+  expect_error(
+      [] {
+        params_from_json(json{{"steps", 300}}, "a.json");
+      },
+      Exit::preset, {"'steps'", "300", "[1, 256]"});
+  expect_error(
+      [] {
+        params_from_json(json{{"radius", -1.5}}, "a.json");
+      },
+      Exit::preset, {"'radius'", "-1.5", "1e-06", "1e+06", "world units"});
+  expect_error(
+      [] {
+        params_from_json(json{{"depth_tolerance", 1.5}}, "a.json");
+      },
+      Exit::preset, {"'depth_tolerance'", "1.5", "[0, 1]"});
+}
+
+// Every numeric row of the table: its bounds are accepted, values beyond them are not.
+TEST(Params, EveryRangeBoundIsInclusiveAndEnforced) {
+  for (const ParamInfo& info : params_table()) {
+    if (std::holds_alternative<bool Params::*>(info.member)) continue;
+    const bool is_int = std::holds_alternative<int Params::*>(info.member);
+    auto value = [&](double v) { return is_int ? json(int(v)) : json(v); };
+    SCOPED_TRACE(info.key);
+    EXPECT_NO_THROW(params_from_json(json{{info.key, value(info.min)}}, "min"));
+    EXPECT_NO_THROW(params_from_json(json{{info.key, value(info.max)}}, "max"));
+    const double above = is_int ? info.max + 1 : info.max * 2 + 1;
+    const double below = is_int ? info.min - 1 : (info.min > 0 ? info.min / 2 : info.min - 1);
+    expect_error(
+        [&] {
+          params_from_json(json{{info.key, value(above)}}, "above");
+        },
+        Exit::preset, {std::string("'") + info.key + "'", "out of range"});
+    expect_error(
+        [&] {
+          params_from_json(json{{info.key, value(below)}}, "below");
+        },
+        Exit::preset, {std::string("'") + info.key + "'", "out of range"});
+  }
+}
+
+TEST(Params, WrongTypeNamesKeyAndValue) {
+  expect_error(
+      [] {
+        params_from_json(json{{"slices", 2.5}}, "t.json");
+      },
+      Exit::preset, {"t.json", "'slices'", "integer", "2.5"});
+  expect_error(
+      [] {
+        params_from_json(json{{"radius", "big"}}, "t.json");
+      },
+      Exit::preset, {"'radius'", "number", "\"big\""});
+  expect_error(
+      [] {
+        params_from_json(json{{"interleave", 1}}, "t.json");
+      },
+      Exit::preset, {"'interleave'", "true or false"});
+  expect_error(
+      [] {
+        params_from_json(json{{"view_layer", 3}}, "t.json");
+      },
+      Exit::preset, {"'view_layer'", "string"});
+  expect_error(
+      [] {
+        params_from_json(json{{"passes", {{"normal", 3}}}}, "t.json");
+      },
+      Exit::preset, {"'passes.normal'", "3"});
+  expect_error(
+      [] {
+        params_from_json(json{{"passes", {{"normal", json::array()}}}}, "t.json");
+      },
+      Exit::preset, {"'passes.normal'"});
+  expect_error(
+      [] {
+        params_from_json(json{{"outputs", "ao"}}, "t.json");
+      },
+      Exit::preset, {"'outputs'", "array"});
+  expect_error(
+      [] {
+        params_from_json(json{{"outputs", json::array({1})}}, "t.json");
+      },
+      Exit::preset, {"'outputs'", "strings"});
+}
+
+TEST(Params, UnknownOrMissingOutput) {
+  expect_error(
+      [] {
+        params_from_json(json{{"outputs", json::array({"ao", "gi"})}}, "o.json");
+      },
+      Exit::preset, {"o.json", "unknown output 'gi'", "known: ao, bentcone"});
+  expect_error(
+      [] {
+        params_from_json(json{{"outputs", json::array()}}, "o.json");
+      },
+      Exit::preset, {"'outputs' is empty"});
+}
+
+TEST(Params, ApplySetPlainJsonAndDottedKeys) {
+  Params base;
+  base.slices = 4;
+  const Params r = apply_set(base, "radius=0.5");
+  EXPECT_EQ(r.radius, 0.5);
+  EXPECT_EQ(r.slices, 4) << "other keys keep the base's value";
+  EXPECT_EQ(base.radius, 1.0) << "the base is not modified";
+
+  EXPECT_FALSE(apply_set(base, "interleave=false").interleave);
+  EXPECT_EQ(apply_set(base, "steps=20").steps, 20);
+  // A bare word is a string.
+  EXPECT_EQ(apply_set(base, "view_layer=RenderLayer").view_layer, "RenderLayer");
+  EXPECT_EQ(apply_set(base, "view_layer=\"Layer 2\"").view_layer, "Layer 2");
+  // JSON values.
+  EXPECT_EQ(apply_set(base, R"(outputs=["ao"])").outputs, std::vector<std::string>{"ao"});
+  // Dotted keys reach into objects and leave the other fields alone.
+  const Params d = apply_set(base, "passes.depth=Depth");
+  EXPECT_EQ(d.passes.at("depth"), json("Depth"));
+  EXPECT_EQ(d.passes.at("normal"), json("Normal"));
+  const Params n = apply_set(base, R"(passes.normal=["N.x","N.y","N.z"])");
+  EXPECT_EQ(n.passes.at("normal"), json::array({"N.x", "N.y", "N.z"}));
+  EXPECT_EQ(n.passes.at("depth"), json("Depth"));
+  EXPECT_EQ(apply_set(base, "passes.alpha=RenderLayer.Combined.A").passes.at("alpha"),
+            json("RenderLayer.Combined.A"));
+  // A value containing '=' keeps everything after the first one.
+  EXPECT_EQ(apply_set(base, "view_layer=a=b").view_layer, "a=b");
+}
+
+TEST(Params, ApplySetErrorsNameTheAssignment) {
+  const Params p;
+  expect_error([&] { apply_set(p, "radius"); }, Exit::preset, {"--set radius", "key=value"});
+  expect_error([&] { apply_set(p, "=3"); }, Exit::preset, {"key=value"});
+  expect_error([&] { apply_set(p, "radius=-2"); }, Exit::preset,
+               {"--set radius=-2", "'radius'", "-2", "out of range"});
+  expect_error([&] { apply_set(p, "radus=2"); }, Exit::preset,
+               {"--set radus=2", "unknown key 'radus'"});
+  expect_error([&] { apply_set(p, "slices=many"); }, Exit::preset,
+               {"'slices'", "integer", "\"many\""});
+  expect_error([&] { apply_set(p, "passes.velocity=Vector"); }, Exit::preset, {"passes.velocity"});
+  expect_error([&] { apply_set(p, R"(outputs=["ao","gi"])"); }, Exit::preset,
+               {"unknown output 'gi'"});
+}
+
+TEST(Params, ShippedPresetsLoad) {
+  const fs::path dir = fs::path(HBIL_SOURCE_DIR) / "presets";
+  std::vector<fs::path> files;
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(dir, ec))
+    if (e.path().extension() == ".json") files.push_back(e.path());
+  if (files.empty()) GTEST_SKIP() << "no presets/*.json yet";
+  for (const auto& f : files) {
+    SCOPED_TRACE(f.string());
+    json j;
+    ASSERT_NO_THROW(j = json::parse(test::read_text(f))) << "not valid JSON";
+    Params p;
+    ASSERT_NO_THROW(p = params_from_json(j, f.string()));
+    EXPECT_EQ(to_json(params_from_json(to_json(p), "round trip")), to_json(p));
+  }
+}
+
+}  // namespace
+}  // namespace hbil
