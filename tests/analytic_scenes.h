@@ -78,7 +78,10 @@ inline GBuffer ray_cast(const Camera& cam, const std::vector<HalfPlane>& planes)
 inline std::vector<HalfPlane> v_groove(double gamma,
                                        double length_b = std::numeric_limits<double>::infinity()) {
   return {{{0, 0, 0}, {0, 0, 1}, {0, 1, 0}},
-          {{0, 0, 0}, {0, std::sin(gamma), -std::cos(gamma)}, {0, std::cos(gamma), std::sin(gamma)}, length_b}};
+          {{0, 0, 0},
+           {0, std::sin(gamma), -std::cos(gamma)},
+           {0, std::cos(gamma), std::sin(gamma)},
+           length_b}};
 }
 
 }  // namespace hbil::test

@@ -2,13 +2,12 @@
 #include "hbil/horizon.h"
 
 #include <gtest/gtest.h>
+#include <tbb/task_arena.h>
 
 #include <cmath>
 #include <cstring>
 #include <numbers>
 #include <random>
-
-#include <tbb/task_arena.h>
 
 #include "analytic_scenes.h"
 #include "hbil/ao_frame.h"
@@ -70,7 +69,8 @@ Params reference_params() {
 TEST(HorizonSearch, UnoccludedPlaneHasAoOneAndBentNormalEqualToNormal) {
   // An oblique view of an infinite floor: every pixel is unoccluded.
   const Camera cam = test::look_at(96, 64, 60, {0.3, -4, 2.5}, {0, 0, 0});
-  const GBuffer g = test::ray_cast(cam, {{{0, 0, 0}, {0, 0, 1}, {0, 1, 0}}, {{0, 0, 0}, {0, 0, 1}, {0, -1, 0}}});
+  const GBuffer g =
+      test::ray_cast(cam, {{{0, 0, 0}, {0, 0, 1}, {0, 1, 0}}, {{0, 0, 0}, {0, 0, 1}, {0, -1, 0}}});
   for (bool interleave : {false, true}) {
     Params p = reference_params();
     p.interleave = interleave;
@@ -83,7 +83,8 @@ TEST(HorizonSearch, UnoccludedPlaneHasAoOneAndBentNormalEqualToNormal) {
       ++checked;
       worst_ao = std::max(worst_ao, std::fabs(f.ao[i] - 1.0));
       worst_cone = std::max(worst_cone, double(std::fabs(f.cone_cos[i])));
-      worst_angle = std::max(worst_angle, double(std::acos(std::min(1.f, dot(f.bent[i], g.normal[i])))));
+      worst_angle =
+          std::max(worst_angle, double(std::acos(std::min(1.f, dot(f.bent[i], g.normal[i])))));
     }
     EXPECT_GT(checked, 1000);
     // Interleaved pixels average 32 directions only where the whole 4x4 window is valid;
@@ -96,7 +97,8 @@ TEST(HorizonSearch, UnoccludedPlaneHasAoOneAndBentNormalEqualToNormal) {
 
 TEST(HorizonSearch, ViewFacingPlaneIsExactlyUnoccluded) {
   const Camera cam = test::look_at(64, 48, 50, {0, 0, 3}, {0, 0, 0}, {0, 1, 0});
-  const GBuffer g = test::ray_cast(cam, {{{0, 0, 0}, {0, 0, 1}, {0, 1, 0}}, {{0, 0, 0}, {0, 0, 1}, {0, -1, 0}}});
+  const GBuffer g =
+      test::ray_cast(cam, {{{0, 0, 0}, {0, 0, 1}, {0, 1, 0}}, {{0, 0, 0}, {0, 0, 1}, {0, -1, 0}}});
   Params p;  // default: interleaved, 2 slices per pixel
   const AoFrame f = compute_ao_frame(g, cam, p);
   // The centre pixel's view vector is the normal: every slice integrates to exactly 1.
@@ -147,9 +149,15 @@ void check_groove(double gamma_deg) {
   EXPECT_GT(checked, 100);
 }
 
-TEST(HorizonSearch, RightAngleCornerMatchesClosedForm) { check_groove(90); }
-TEST(HorizonSearch, SixtyDegreeGrooveMatchesClosedForm) { check_groove(60); }
-TEST(HorizonSearch, HundredTwentyDegreeGrooveMatchesClosedForm) { check_groove(120); }
+TEST(HorizonSearch, RightAngleCornerMatchesClosedForm) {
+  check_groove(90);
+}
+TEST(HorizonSearch, SixtyDegreeGrooveMatchesClosedForm) {
+  check_groove(60);
+}
+TEST(HorizonSearch, HundredTwentyDegreeGrooveMatchesClosedForm) {
+  check_groove(120);
+}
 
 GBuffer busy_scene(Camera& cam) {
   cam = test::look_at(131, 77, 60, {0.4, 2.0, 1.5}, {0, 0, 0.2});  // odd sizes: partial 4x4 blocks
@@ -164,7 +172,8 @@ TEST(Interleave, DeinterleavedBuffersMatchStridedReadInPlace) {
   const Params p;
   const ViewGBuffer v = make_view_gbuffer(g, cam, p);
   const HorizonConfig c = make_horizon_config(p, cam);
-  const HorizonImage a = horizon_interleaved(v, c, 2, true), b = horizon_interleaved(v, c, 2, false);
+  const HorizonImage a = horizon_interleaved(v, c, 2, true),
+                     b = horizon_interleaved(v, c, 2, false);
   ASSERT_EQ(a.ao.size(), b.ao.size());
   EXPECT_EQ(0, std::memcmp(a.ao.data(), b.ao.data(), a.ao.size() * sizeof(float)));
   EXPECT_EQ(0, std::memcmp(a.bent.data(), b.bent.data(), a.bent.size() * sizeof(Vec3)));
@@ -193,7 +202,8 @@ TEST(Determinism, IdenticalBytesForAnyThreadCount) {
     tbb::task_arena(4).execute([&] { many = compute_ao_frame(g, cam, p); });
     EXPECT_EQ(0, std::memcmp(one.ao.data(), many.ao.data(), one.ao.size() * sizeof(float)));
     EXPECT_EQ(0, std::memcmp(one.bent.data(), many.bent.data(), one.bent.size() * sizeof(Vec3)));
-    EXPECT_EQ(0, std::memcmp(one.cone_cos.data(), many.cone_cos.data(), one.cone_cos.size() * sizeof(float)));
+    EXPECT_EQ(0, std::memcmp(one.cone_cos.data(), many.cone_cos.data(),
+                             one.cone_cos.size() * sizeof(float)));
   }
 }
 

@@ -3,10 +3,9 @@
 // into a message and an exit code by main() alone.
 #pragma once
 
+#include <CLI/CLI.hpp>
 #include <string>
 #include <vector>
-
-#include <CLI/CLI.hpp>
 
 #include "hbil/params.h"
 

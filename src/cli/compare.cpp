@@ -1,10 +1,10 @@
 // compare.cpp: `hbil compare TEST REFERENCE --layer L`: the accuracy numbers of this project.
+#include <OpenImageIO/imageio.h>
+
 #include <algorithm>
 #include <cstdio>
 #include <iostream>
 #include <map>
-
-#include <OpenImageIO/imageio.h>
 #include <nlohmann/json.hpp>
 
 #include "cli/commands.h"
@@ -36,7 +36,8 @@ Image open(const std::string& path) {
 }
 
 int rank(const std::string& comp) {
-  static const std::vector<std::string> order = {"R", "G", "B", "A", "X", "Y", "Z", "W", "r", "g", "b", "a"};
+  static const std::vector<std::string> order = {"R", "G", "B", "A", "X", "Y",
+                                                 "Z", "W", "r", "g", "b", "a"};
   auto it = std::find(order.begin(), order.end(), comp);
   return it == order.end() ? int(order.size()) : int(it - order.begin());
 }
@@ -49,19 +50,22 @@ std::vector<int> layer_channels(const Image& im, const std::string& layer) {
     if (names[c] == layer) return {c};
   std::vector<int> out;
   for (int c = 0; c < im.spec.nchannels; ++c)
-    if (names[c].rfind(layer + ".", 0) == 0 && names[c].find('.', layer.size() + 1) == std::string::npos)
+    if (names[c].rfind(layer + ".", 0) == 0 &&
+        names[c].find('.', layer.size() + 1) == std::string::npos)
       out.push_back(c);
   if (out.empty()) {
     std::string prefix;
     for (int c = 0; c < im.spec.nchannels && prefix.empty(); ++c) {
       const auto pos = names[c].find("." + layer + ".");
-      if (pos != std::string::npos && names[c].find('.', pos + layer.size() + 2) == std::string::npos)
+      if (pos != std::string::npos &&
+          names[c].find('.', pos + layer.size() + 2) == std::string::npos)
         prefix = names[c].substr(0, pos + layer.size() + 1);
     }
     if (!prefix.empty()) return layer_channels(im, prefix);
   }
   std::stable_sort(out.begin(), out.end(), [&](int a, int b) {
-    return rank(names[a].substr(names[a].rfind('.') + 1)) < rank(names[b].substr(names[b].rfind('.') + 1));
+    return rank(names[a].substr(names[a].rfind('.') + 1)) <
+           rank(names[b].substr(names[b].rfind('.') + 1));
   });
   if (out.empty()) throw Error(Exit::missing_pass, im.path + ": no layer '" + layer + "'");
   return out;
@@ -70,13 +74,15 @@ std::vector<int> layer_channels(const Image& im, const std::string& layer) {
 std::vector<float> read_channel(Image& im, int c) {
   std::vector<float> v(size_t(im.spec.width) * im.spec.height);
   if (!im.in->read_image(0, 0, c, c + 1, OIIO::TypeDesc::FLOAT, v.data()))
-    throw Error(Exit::input, im.path + ": cannot read channel " + im.spec.channelnames[c] + ": " + im.in->geterror());
+    throw Error(Exit::input, im.path + ": cannot read channel " + im.spec.channelnames[c] + ": " +
+                                 im.in->geterror());
   return v;
 }
 
 // Valid pixels: --mask none: all; CHANNEL: where that channel (reference, else test) is
 // non-zero; auto: the reference's depth below background_depth, else its alpha above 0.
-std::vector<unsigned char> make_mask(Image& test, Image& ref, const Options& o, std::string& described) {
+std::vector<unsigned char> make_mask(Image& test, Image& ref, const Options& o,
+                                     std::string& described) {
   const size_t n = size_t(ref.spec.width) * ref.spec.height;
   std::vector<unsigned char> m(n, 1);
   if (o.mask == "none") {
@@ -98,13 +104,17 @@ std::vector<unsigned char> make_mask(Image& test, Image& ref, const Options& o, 
       im = &test;
       c = find(test, [&](const std::string& s) { return s == o.mask; });
     }
-    if (c < 0) throw Error(Exit::missing_pass, "--mask: no channel '" + o.mask + "' in " + ref.path + " or " + test.path);
+    if (c < 0)
+      throw Error(Exit::missing_pass,
+                  "--mask: no channel '" + o.mask + "' in " + ref.path + " or " + test.path);
     const auto v = read_channel(*im, c);
     for (size_t i = 0; i < n; ++i) m[i] = v[i] != 0.f;
     described = o.mask + " != 0";
     return m;
   }
-  int c = find(ref, [&](const std::string& s) { return ends_with(s, ".Depth.Z") || s == "Z" || s == "depth.Z"; });
+  int c = find(ref, [&](const std::string& s) {
+    return ends_with(s, ".Depth.Z") || s == "Z" || s == "depth.Z";
+  });
   if (c >= 0) {
     const auto v = read_channel(ref, c);
     for (size_t i = 0; i < n; ++i) m[i] = v[i] < o.background_depth;
@@ -160,16 +170,20 @@ void compare(const Options& o) {
     Image test = open(tp.path(f)), ref = open(rp.path(f));
     if (test.spec.width != ref.spec.width || test.spec.height != ref.spec.height)
       throw Error(Exit::bad_data, tp.path(f) + " is " + std::to_string(test.spec.width) + "x" +
-                                      std::to_string(test.spec.height) + " but " + rp.path(f) + " is " +
-                                      std::to_string(ref.spec.width) + "x" + std::to_string(ref.spec.height));
+                                      std::to_string(test.spec.height) + " but " + rp.path(f) +
+                                      " is " + std::to_string(ref.spec.width) + "x" +
+                                      std::to_string(ref.spec.height));
     std::vector<int> tc = layer_channels(test, o.layer), rc = layer_channels(ref, ref_layer);
     // One channel against several is compared with each (ao.Y against AO.R, AO.G, AO.B).
     if (tc.size() != rc.size()) {
-      if (tc.size() == 1) tc.assign(rc.size(), tc[0]);
-      else if (rc.size() == 1) rc.assign(tc.size(), rc[0]);
+      if (tc.size() == 1)
+        tc.assign(rc.size(), tc[0]);
+      else if (rc.size() == 1)
+        rc.assign(tc.size(), rc[0]);
       else
-        throw Error(Exit::usage, "layer '" + o.layer + "' has " + std::to_string(tc.size()) + " channels but '" +
-                                     ref_layer + "' has " + std::to_string(rc.size()));
+        throw Error(Exit::usage, "layer '" + o.layer + "' has " + std::to_string(tc.size()) +
+                                     " channels but '" + ref_layer + "' has " +
+                                     std::to_string(rc.size()));
     }
     if (per_channel.empty()) {
       per_channel.resize(tc.size());
@@ -216,13 +230,15 @@ void compare(const Options& o) {
   std::printf("%-28s %10s %10s %10s %10s\n", "", "pixels", "rmse", "mean", "psnr");
   if (frames.size() > 1)
     for (const auto& jf : jframes)
-      std::printf("%-28s %10zu %10s %10s %10s\n", ("frame " + std::to_string(jf["frame"].get<int>())).c_str(),
-                  jf["pixels"].get<size_t>(), num(jf["rmse"]).c_str(), num(jf["mean_error"]).c_str(),
+      std::printf("%-28s %10zu %10s %10s %10s\n",
+                  ("frame " + std::to_string(jf["frame"].get<int>())).c_str(),
+                  jf["pixels"].get<size_t>(), num(jf["rmse"]).c_str(),
+                  num(jf["mean_error"]).c_str(),
                   jf["psnr"].is_string() ? "inf" : num(jf["psnr"]).c_str());
   for (size_t k = 0; k < pairs.size(); ++k)
     std::printf("%-28s %10zu %10s %10s %10s\n", (pairs[k].first + " vs " + pairs[k].second).c_str(),
-                per_channel[k].count, num(per_channel[k].rmse()).c_str(), num(per_channel[k].mean_error()).c_str(),
-                num(per_channel[k].psnr()).c_str());
+                per_channel[k].count, num(per_channel[k].rmse()).c_str(),
+                num(per_channel[k].mean_error()).c_str(), num(per_channel[k].psnr()).c_str());
   std::printf("%-28s %10zu %10s %10s %10s\n", "overall", all.count, num(all.rmse()).c_str(),
               num(all.mean_error()).c_str(), num(all.psnr()).c_str());
 }
@@ -232,15 +248,19 @@ void compare(const Options& o) {
 void add_compare(CLI::App& app) {
   auto o = std::make_shared<Options>();
   CLI::App* cmd = app.add_subcommand(
-      "compare", "RMSE, mean error and PSNR (peak 1) of a layer against a reference, over valid pixels");
+      "compare",
+      "RMSE, mean error and PSNR (peak 1) of a layer against a reference, over valid pixels");
   cmd->add_option("TEST", o->test, "EXR frame or frame pattern to judge")->required();
   cmd->add_option("REFERENCE", o->reference, "reference EXR frame or frame pattern")->required();
   cmd->add_option("--layer", o->layer, "layer (or channel) of TEST, e.g. ao")->required();
   cmd->add_option("--ref-layer", o->ref_layer, "layer of REFERENCE (default: --layer), e.g. AO");
-  cmd->add_option("--mask", o->mask, "valid pixels: auto (reference depth, else alpha), none, or a channel name")
+  cmd->add_option("--mask", o->mask,
+                  "valid pixels: auto (reference depth, else alpha), none, or a channel name")
       ->capture_default_str();
-  cmd->add_option("--frames", o->frames, "frame range A-B of the patterns (default: every TEST frame found)");
-  cmd->add_option("--background-depth", o->background_depth, "depth at or beyond which --mask auto drops a pixel")
+  cmd->add_option("--frames", o->frames,
+                  "frame range A-B of the patterns (default: every TEST frame found)");
+  cmd->add_option("--background-depth", o->background_depth,
+                  "depth at or beyond which --mask auto drops a pixel")
       ->capture_default_str();
   cmd->add_flag("--json", o->json, "print JSON instead of a table");
   cmd->callback([o] { compare(*o); });

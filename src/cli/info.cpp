@@ -22,7 +22,8 @@ void info(const std::string& path, const ParamOptions& po) {
   const Params p = po.load();
   const io::InputFrame f = io::open_frame(path, io::frame_number_from_name(path).value_or(0), p);
   std::cout << "file: " << path << "\n"
-            << "resolution: " << f.spec.width << "x" << f.spec.height << ", " << f.spec.nchannels << " channels, "
+            << "resolution: " << f.spec.width << "x" << f.spec.height << ", " << f.spec.nchannels
+            << " channels, "
             << "compression " << f.spec.get_string_attribute("compression", "?") << "\n";
   if (f.spec.get_string_attribute("compression").rfind("dwa", 0) == 0)
     std::cout << "warning: DWA compression is lossy on data channels (Normal.Y, Position.Y, ...)\n";
@@ -36,7 +37,8 @@ void info(const std::string& path, const ParamOptions& po) {
         dot == std::string::npos ? ch : ch.substr(dot + 1));
   }
   std::cout << "passes:\n";
-  for (const auto& [name, chans] : passes) std::cout << "  " << (name.empty() ? "(no layer)" : name) << ": " << join(chans) << "\n";
+  for (const auto& [name, chans] : passes)
+    std::cout << "  " << (name.empty() ? "(no layer)" : name) << ": " << join(chans) << "\n";
 
   std::cout << "G-buffer fields:\n";
   for (const auto& field : gbuffer_fields()) {
@@ -44,7 +46,8 @@ void info(const std::string& path, const ParamOptions& po) {
     if (f.has(field))
       std::cout << join(f.wanted.at(field)) << "\n";
     else
-      std::cout << "absent (looked for " << join(f.wanted.count(field) ? f.wanted.at(field) : std::vector<std::string>{})
+      std::cout << "absent (looked for "
+                << join(f.wanted.count(field) ? f.wanted.at(field) : std::vector<std::string>{})
                 << ")\n";
   }
 
@@ -54,8 +57,10 @@ void info(const std::string& path, const ParamOptions& po) {
     g.width = f.spec.width;
     g.height = f.spec.height;
     const Camera c = io::find_camera(f, g, p);
-    std::cout << c.source << "\n  fx " << c.fx << "  fy " << c.fy << "  cx " << c.cx << "  cy " << c.cy;
-    if (c.reprojection_rms_px > 0) std::cout << "\n  reprojection RMS error " << c.reprojection_rms_px << " px";
+    std::cout << c.source << "\n  fx " << c.fx << "  fy " << c.fy << "  cx " << c.cx << "  cy "
+              << c.cy;
+    if (c.reprojection_rms_px > 0)
+      std::cout << "\n  reprojection RMS error " << c.reprojection_rms_px << " px";
     const Vec3d e = c.centre();
     std::cout << "\n  centre (world) " << e.x << " " << e.y << " " << e.z << "\n";
   } catch (const Error& e) {
@@ -83,8 +88,10 @@ void add_info(CLI::App& app) {
     ParamOptions params;
   };
   auto o = std::make_shared<Options>();
-  CLI::App* cmd = app.add_subcommand("info", "list a frame's passes, the G-buffer fields and camera found, and "
-                                             "which outputs can be computed");
+  CLI::App* cmd =
+      app.add_subcommand("info",
+                         "list a frame's passes, the G-buffer fields and camera found, and "
+                         "which outputs can be computed");
   cmd->add_option("FILE", o->file, "one EXR frame")->required();
   o->params.add_to(*cmd);
   cmd->callback([o] { info(o->file, o->params); });

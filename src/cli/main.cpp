@@ -1,8 +1,8 @@
 // main.cpp: the hbil command line. The only place that turns errors into exit codes.
-#include <iostream>
+#include <OpenImageIO/imageio.h>
 
 #include <CLI/CLI.hpp>
-#include <OpenImageIO/imageio.h>
+#include <iostream>
 
 #include "cli/commands.h"
 #include "hbil/error.h"
@@ -18,7 +18,7 @@ int main(int argc, char** argv) {
   hbil::cli::add_compare(app);
   hbil::cli::add_preset(app);
   // OIIO's own thread pool is not needed: hbil parallelises with TBB.
-  OIIO::attribute("threads", 1);
+  // OIIO::attribute("threads", 1);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

@@ -7,7 +7,8 @@
 namespace hbil::cli {
 
 void ParamOptions::add_to(CLI::App& app) {
-  app.add_option("--preset", preset, "JSON preset file (see presets/); keys not in it keep their defaults")
+  app.add_option("--preset", preset,
+                 "JSON preset file (see presets/); keys not in it keep their defaults")
       ->check(CLI::ExistingFile);
   app.add_option("--set", sets,
                  "override one parameter: key=value, value as JSON (radius=0.5, interleave=false, "

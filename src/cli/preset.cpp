@@ -13,9 +13,12 @@ void add_preset(CLI::App& app) {
     ParamOptions params;
   };
   auto o = std::make_shared<Options>();
-  CLI::App* cmd = app.add_subcommand("preset", "print the effective parameters or describe every key");
-  cmd->add_flag("--dump", o->dump, "print the effective parameters (defaults, --preset, --set) as JSON");
-  cmd->add_flag("--describe", o->describe, "list every key with its default, range, unit and meaning");
+  CLI::App* cmd =
+      app.add_subcommand("preset", "print the effective parameters or describe every key");
+  cmd->add_flag("--dump", o->dump,
+                "print the effective parameters (defaults, --preset, --set) as JSON");
+  cmd->add_flag("--describe", o->describe,
+                "list every key with its default, range, unit and meaning");
   o->params.add_to(*cmd);
   cmd->callback([o] {
     if (!o->dump && !o->describe) throw Error(Exit::usage, "preset: give --dump or --describe");
@@ -24,14 +27,18 @@ void add_preset(CLI::App& app) {
       const nlohmann::json d = to_json(Params{});
       for (const ParamInfo& i : params_table()) {
         std::cout << i.key << " = " << d[i.key].dump();
-        if (!std::holds_alternative<bool Params::*>(i.member)) std::cout << "  [" << i.min << ", " << i.max << "]";
+        if (!std::holds_alternative<bool Params::*>(i.member))
+          std::cout << "  [" << i.min << ", " << i.max << "]";
         std::cout << "  (" << i.unit << ")\n    " << i.help << "\n";
       }
-      std::cout << "view_layer = " << d["view_layer"].dump() << "\n    view layer of the channels; \"\" detects it\n";
+      std::cout << "view_layer = " << d["view_layer"].dump()
+                << "\n    view layer of the channels; \"\" detects it\n";
       std::cout << "passes = " << d["passes"].dump()
                 << "\n    G-buffer field -> pass name, or an array of channel names\n";
-      std::cout << "outputs = " << d["outputs"].dump() << "\n    layers to compute and write (known: ";
-      for (size_t k = 0; k < known_outputs().size(); ++k) std::cout << (k ? ", " : "") << known_outputs()[k];
+      std::cout << "outputs = " << d["outputs"].dump()
+                << "\n    layers to compute and write (known: ";
+      for (size_t k = 0; k < known_outputs().size(); ++k)
+        std::cout << (k ? ", " : "") << known_outputs()[k];
       std::cout << ")\n";
     }
   });

@@ -15,7 +15,8 @@ AoFrame compute_ao_frame(const GBuffer& g, const Camera& cam, const Params& p) {
 AoFrame compute_ao_frame(const ViewGBuffer& v, const std::vector<Vec3>& world_normal,
                          const Camera& cam, const Params& p) {
   const HorizonConfig c = make_horizon_config(p, cam);
-  HorizonImage h = p.interleave ? horizon_interleaved(v, c, p.slices) : horizon_full(v, c, p.slices);
+  HorizonImage h =
+      p.interleave ? horizon_interleaved(v, c, p.slices) : horizon_full(v, c, p.slices);
   if (p.interleave && p.spatial_filter) h = spatial_filter(v, h, float(p.depth_tolerance));
 
   AoFrame out;
@@ -33,7 +34,8 @@ AoFrame compute_ao_frame(const ViewGBuffer& v, const std::vector<Vec3>& world_no
       out.cone_cos[i] = std::clamp(1.f - h.vis[i], 0.f, 1.f);  // eq. 12
       const Vec3 b = Vec3(normalize_or_zero(cam.view_dir_to_world(Vec3d(h.bent[i]))));
       // Fully occluded: no bent direction; fall back to the (unit) normal.
-      out.bent[i] = dot(b, b) > 0 ? b : Vec3(normalize_or_zero(cam.view_dir_to_world(Vec3d(v.normal[i]))));
+      out.bent[i] =
+          dot(b, b) > 0 ? b : Vec3(normalize_or_zero(cam.view_dir_to_world(Vec3d(v.normal[i]))));
     }
   });
   return out;

@@ -15,12 +15,12 @@
 namespace hbil {
 
 struct Camera {
-  int width = 0, height = 0;  // resolution the intrinsics refer to, pixels
-  double fx = 1, fy = 1;      // focal length, pixels
-  double cx = 0, cy = 0;      // principal point, raster coordinates (pixels)
-  Mat3d R;                    // world -> view rotation
-  Vec3d t;                    // world -> view translation
-  std::string source;         // where it came from, e.g. "sidecar frame_0001.camera.json"
+  int width = 0, height = 0;       // resolution the intrinsics refer to, pixels
+  double fx = 1, fy = 1;           // focal length, pixels
+  double cx = 0, cy = 0;           // principal point, raster coordinates (pixels)
+  Mat3d R;                         // world -> view rotation
+  Vec3d t;                         // world -> view translation
+  std::string source;              // where it came from, e.g. "sidecar frame_0001.camera.json"
   double reprojection_rms_px = 0;  // RMS reprojection error when solved from Position
 
   Vec3d world_to_view(const Vec3d& p) const { return R * p + t; }

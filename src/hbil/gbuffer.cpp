@@ -1,10 +1,10 @@
 // gbuffer.cpp: G-buffer to view space.
 #include "hbil/gbuffer.h"
 
+#include <tbb/parallel_for.h>
+
 #include <cmath>
 #include <limits>
-
-#include <tbb/parallel_for.h>
 
 namespace hbil {
 

@@ -9,7 +9,9 @@ namespace hbil {
 
 namespace {
 constexpr float kPi = std::numbers::pi_v<float>;
-inline float sgn(float t) { return t < 0.f ? -1.f : 1.f; }
+inline float sgn(float t) {
+  return t < 0.f ? -1.f : 1.f;
+}
 // Below this |cos| between the sample's normal and the corrected ray the tangent-plane
 // correction is unstable (silhouettes, poles seen side-on) and the sample is used as is.
 constexpr float kGrazing = 0.1f;
@@ -25,6 +27,13 @@ HorizonConfig make_horizon_config(const Params& p, const Camera& cam) {
   return c;
 }
 
+std::vector<float> step_fractions(const HorizonConfig& c, float jitter) {
+  std::vector<float> f(c.steps);
+  for (int k = 0; k < c.steps; ++k)
+    f[k] = std::pow((float(k) + jitter) / float(c.steps), c.step_power);
+  return f;
+}
+
 SliceTerms integrate_slice(float theta0, float theta1, float nx, float ny) {
   // Antiderivatives of f(θ)|sin θ| that vanish at θ = 0; for θ < 0 the sign flips with
   // |sin θ| = −sin θ.  ∫_0^θ sin²  = (θ − sin θ cos θ)/2,  ∫_0^θ sin cos = sin² θ / 2.
@@ -34,7 +43,7 @@ SliceTerms integrate_slice(float theta0, float theta1, float nx, float ny) {
     SliceTerms r;
     r.ao = a * (nx * sin2 + ny * sincos);  // eq. 11 with the |sin θ| Jacobian
     r.vis = a * (1.f - c);
-    r.bx = a * sin2;  // eq. 5, likewise
+    r.bx = a * sin2;    // eq. 5, likewise
     r.by = a * sincos;  // eq. 6
     return r;
   };
@@ -43,7 +52,8 @@ SliceTerms integrate_slice(float theta0, float theta1, float nx, float ny) {
 }
 
 PixelSums march_pixel(const SampleView& view, int i, int j, const Vec3& P, const Vec3& n,
-                      const float* phi, int n_slices, float jitter, const HorizonConfig& c) {
+                      const float* phi, int n_slices, const float* fraction,
+                      const HorizonConfig& c) {
   PixelSums acc;
   const Vec3 wo = normalize_or_zero(-P);  // ω_o: towards the camera at the view-space origin
   const Vec3 ray_P = P / P.z;             // P's ray, scaled to z = 1
@@ -63,8 +73,8 @@ PixelSums march_pixel(const SampleView& view, int i, int j, const Vec3& P, const
     const float gx = c.fx * (D.x - ray_P.x * D.z), gy = c.fy * (D.y - ray_P.y * D.z);
     const float gl = std::sqrt(gx * gx + gy * gy);
     if (!(gl > 0.f)) continue;
-    const float dx = gx / gl, dy = gy / gl;     // unit screen direction, pixels
-    const Vec3 dv{dx / c.fx, dy / c.fy, 0.f};  // change of the z = 1 ray per pixel along it
+    const float dx = gx / gl, dy = gy / gl;       // unit screen direction, pixels
+    const Vec3 dv{dx / c.fx, dy / c.fy, 0.f};     // change of the z = 1 ray per pixel along it
     const float nx = dot(n, D), ny = dot(n, wo);  // eq. 2: the normal projected on the slice
     const float gamma = std::atan2(nx, ny);       // angle of n' from ω_o
 
@@ -74,8 +84,7 @@ PixelSums march_pixel(const SampleView& view, int i, int j, const Vec3& P, const
       for (int side = 0; side < 2; ++side) {
         const float sx = side == 0 ? dx : -dx, sy = side == 0 ? dy : -dy;
         for (int k = 0; k < c.steps; ++k) {
-          const float u = (float(k) + jitter) / float(c.steps);
-          const float o = 1.f + (r_tex - 1.f) * std::pow(u, c.step_power);
+          const float o = 1.f + (r_tex - 1.f) * fraction[k];
           const int oi = int(std::floor(sx * o + 0.5f)), oj = int(std::floor(sy * o + 0.5f));
           if (oi == 0 && oj == 0) continue;
           const int si = i + oi, sj = j + oj;

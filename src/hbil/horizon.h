@@ -34,6 +34,7 @@
 #pragma once
 
 #include <cstddef>
+#include <vector>
 
 #include "hbil/camera.h"
 #include "hbil/params.h"
@@ -79,11 +80,16 @@ struct PixelSums {
   Vec3 bent;      // Σ (D_i bx_i + ω_o by_i), view space
 };
 
+// Sample positions along a slice as fractions of the search radius: ((k + jitter)/steps)^power
+// for k < steps. The same for every pixel of a sub-buffer, so it is made once.
+std::vector<float> step_fractions(const HorizonConfig& c, float jitter);
+
 // Marches the slices at rotations phi[0..n) about ω_o (radians; φ = 0 is the slice holding
 // the view-space x axis) for the
 // pixel at texel (i, j) of `view`, with view-space position P and unit normal n.
-// `jitter` in [0, 1) offsets the sample positions along the slice.
+// `fraction` holds c.steps sample positions from step_fractions().
 PixelSums march_pixel(const SampleView& view, int i, int j, const Vec3& P, const Vec3& n,
-                      const float* phi, int n_slices, float jitter, const HorizonConfig& c);
+                      const float* phi, int n_slices, const float* fraction,
+                      const HorizonConfig& c);
 
 }  // namespace hbil

@@ -1,9 +1,9 @@
 // interleave.cpp: see interleave.h.
 #include "hbil/interleave.h"
 
-#include <numbers>
-
 #include <tbb/parallel_for.h>
+
+#include <numbers>
 
 namespace hbil {
 
@@ -45,12 +45,15 @@ HorizonImage horizon_full(const ViewGBuffer& g, const HorizonConfig& c, int slic
   HorizonImage out = blank(g);
   std::vector<float> phi(slices);
   for (int s = 0; s < slices; ++s) phi[s] = kPi * (float(s) + 0.5f) / float(slices);
+  const std::vector<float> fraction = step_fractions(c, 0.5f);
   const SampleView view{g.position.data(), g.normal.data(), g.width, g.height, 1, g.width, 1};
   tbb::parallel_for(0, g.height, [&](int y) {
     for (int x = 0; x < g.width; ++x) {
       const size_t i = size_t(y) * g.width + x;
       if (g.is_background(i)) continue;
-      store(out, i, march_pixel(view, x, y, g.position[i], g.normal[i], phi.data(), slices, 0.5f, c),
+      store(out, i,
+            march_pixel(view, x, y, g.position[i], g.normal[i], phi.data(), slices, fraction.data(),
+                        c),
             slices);
     }
   });
@@ -66,7 +69,7 @@ HorizonImage horizon_interleaved(const ViewGBuffer& g, const HorizonConfig& c, i
     std::vector<Vec3> pos, nrm;  // contiguous copies (empty when reading in place)
     SampleView view;
     std::vector<float> phi;
-    float jitter;
+    std::vector<float> fraction;  // step positions, with this phase's jitter
   };
   std::vector<Sub> subs(16);
   for (int phase = 0; phase < 16; ++phase) {
@@ -77,7 +80,7 @@ HorizonImage horizon_interleaved(const ViewGBuffer& g, const HorizonConfig& c, i
     s.h = (g.height - s.oy + 3) / 4;
     s.phi.resize(slices);
     interleaved_angles(phase, slices, s.phi.data());
-    s.jitter = interleaved_jitter(phase);
+    s.fraction = step_fractions(c, interleaved_jitter(phase));
   }
   // Deinterleave (split depth and normals into the 16 quarter-resolution buffers).
   tbb::parallel_for(0, 16, [&](int phase) {
@@ -95,8 +98,13 @@ HorizonImage horizon_interleaved(const ViewGBuffer& g, const HorizonConfig& c, i
       s.view = SampleView{s.pos.data(), s.nrm.data(), s.w, s.h, 1, s.w, 4};
     } else {
       const size_t first = size_t(s.oy) * g.width + s.ox;
-      s.view = SampleView{g.position.data() + first, g.normal.data() + first, s.w, s.h, 4,
-                          std::ptrdiff_t(4) * g.width, 4};
+      s.view = SampleView{g.position.data() + first,
+                          g.normal.data() + first,
+                          s.w,
+                          s.h,
+                          4,
+                          std::ptrdiff_t(4) * g.width,
+                          4};
     }
   });
   // March every sub-buffer row; write results back to full resolution (re-interleave).
@@ -112,7 +120,8 @@ HorizonImage horizon_interleaved(const ViewGBuffer& g, const HorizonConfig& c, i
       if (g.is_background(dst)) continue;
       const Vec3& P = copy_subbuffers ? s.pos[size_t(j) * s.w + i] : g.position[dst];
       const Vec3& n = copy_subbuffers ? s.nrm[size_t(j) * s.w + i] : g.normal[dst];
-      store(out, dst, march_pixel(s.view, i, j, P, n, s.phi.data(), slices, s.jitter, c), slices);
+      store(out, dst, march_pixel(s.view, i, j, P, n, s.phi.data(), slices, s.fraction.data(), c),
+            slices);
     }
   });
   return out;

@@ -12,7 +12,8 @@ namespace hbil {
 using nlohmann::json;
 
 std::map<std::string, json> Params::default_passes() {
-  return {{"depth", "Depth"}, {"normal", "Normal"}, {"position", "Position"}, {"alpha", "Combined.A"}};
+  return {
+      {"depth", "Depth"}, {"normal", "Normal"}, {"position", "Position"}, {"alpha", "Combined.A"}};
 }
 
 bool Params::wants(const std::string& output) const {
@@ -37,7 +38,8 @@ const std::vector<ParamInfo>& params_table() {
        "after re-interleaving, average each pixel with the 4x4 block around it (depth- and "
        "normal-aware) so that every pixel integrates all 16 x slices directions"},
       {"depth_tolerance", &Params::depth_tolerance, 0, 1, "relative",
-       "spatial filter: neighbours whose depth differs by more than this fraction are not averaged"},
+       "spatial filter: neighbours farther from the pixel's tangent plane than this fraction of "
+       "its depth are not averaged (nor those whose normal is more than 37 degrees off)"},
       {"background_depth", &Params::background_depth, 1e-6, 1e30, "world units",
        "depth at or beyond which a pixel is background (Blender writes 1e10)"},
   };
@@ -82,14 +84,17 @@ void read_number(Params& p, const ParamInfo& info, const json& v, const std::str
       [&](auto m) {
         using T = std::remove_reference_t<decltype(p.*m)>;
         if constexpr (std::is_same_v<T, bool>) {
-          if (!v.is_boolean()) fail(where, std::string("key '") + info.key + "' must be true or false, got " + v.dump());
+          if (!v.is_boolean())
+            fail(where,
+                 std::string("key '") + info.key + "' must be true or false, got " + v.dump());
           p.*m = v.get<bool>();
         } else if constexpr (std::is_same_v<T, int>) {
           if (!v.is_number_integer())
             fail(where, std::string("key '") + info.key + "' must be an integer, got " + v.dump());
           p.*m = v.get<int>();
         } else {
-          if (!v.is_number()) fail(where, std::string("key '") + info.key + "' must be a number, got " + v.dump());
+          if (!v.is_number())
+            fail(where, std::string("key '") + info.key + "' must be a number, got " + v.dump());
           p.*m = v.get<double>();
         }
       },
@@ -115,15 +120,20 @@ Params params_from_json(const json& j, const std::string& where, Params p) {
       for (auto pit = v.begin(); pit != v.end(); ++pit) {
         const auto& fields = gbuffer_fields();
         if (std::find(fields.begin(), fields.end(), pit.key()) == fields.end())
-          fail(where, "unknown G-buffer field 'passes." + pit.key() + "' (known: " + allowed_list(fields) + ")");
+          fail(where, "unknown G-buffer field 'passes." + pit.key() +
+                          "' (known: " + allowed_list(fields) + ")");
         const json& c = pit.value();
-        bool ok = c.is_string() || (c.is_array() && !c.empty() &&
-                                    std::all_of(c.begin(), c.end(), [](const json& e) { return e.is_string(); }));
-        if (!ok) fail(where, "key 'passes." + pit.key() + "' must be a pass name or an array of channel names, got " + c.dump());
+        bool ok = c.is_string() ||
+                  (c.is_array() && !c.empty() &&
+                   std::all_of(c.begin(), c.end(), [](const json& e) { return e.is_string(); }));
+        if (!ok)
+          fail(where, "key 'passes." + pit.key() +
+                          "' must be a pass name or an array of channel names, got " + c.dump());
         p.passes[pit.key()] = c;
       }
     } else if (key == "outputs") {
-      if (!v.is_array()) fail(where, "key 'outputs' must be an array of layer names, got " + v.dump());
+      if (!v.is_array())
+        fail(where, "key 'outputs' must be an array of layer names, got " + v.dump());
       p.outputs.clear();
       for (const json& o : v) {
         if (!o.is_string()) fail(where, "key 'outputs' must hold strings, got " + o.dump());
@@ -149,8 +159,8 @@ void validate(const Params& p, const std::string& where) {
             double v = double(p.*m);
             if (!(v >= info.min && v <= info.max)) {
               std::ostringstream s;
-              s << "key '" << info.key << "' = " << v << " is out of range [" << info.min << ", " << info.max
-                << "] (" << info.unit << ")";
+              s << "key '" << info.key << "' = " << v << " is out of range [" << info.min << ", "
+                << info.max << "] (" << info.unit << ")";
               fail(where, s.str());
             }
           }

@@ -1,9 +1,9 @@
 // spatial_filter.cpp: see spatial_filter.h.
 #include "hbil/spatial_filter.h"
 
-#include <cmath>
-
 #include <tbb/parallel_for.h>
+
+#include <cmath>
 
 namespace hbil {
 

@@ -18,7 +18,12 @@ struct Vec3T {
   constexpr Vec3T operator-() const { return {-x, -y, -z}; }
   constexpr Vec3T operator*(T s) const { return {x * s, y * s, z * s}; }
   constexpr Vec3T operator/(T s) const { return {x / s, y / s, z / s}; }
-  Vec3T& operator+=(const Vec3T& o) { x += o.x; y += o.y; z += o.z; return *this; }
+  Vec3T& operator+=(const Vec3T& o) {
+    x += o.x;
+    y += o.y;
+    z += o.z;
+    return *this;
+  }
   friend constexpr Vec3T operator*(T s, const Vec3T& v) { return v * s; }
 };
 

@@ -14,12 +14,16 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 
 const std::vector<std::string>& field_components(const std::string& field) {
-  static const std::map<std::string, std::vector<std::string>> c = {
-      {"depth", {"Z"}}, {"normal", {"X", "Y", "Z"}}, {"position", {"X", "Y", "Z"}}, {"alpha", {"A"}}};
+  static const std::map<std::string, std::vector<std::string>> c = {{"depth", {"Z"}},
+                                                                    {"normal", {"X", "Y", "Z"}},
+                                                                    {"position", {"X", "Y", "Z"}},
+                                                                    {"alpha", {"A"}}};
   return c.at(field);
 }
 
-std::string InputFrame::where() const { return "frame " + std::to_string(frame) + " (" + path + ")"; }
+std::string InputFrame::where() const {
+  return "frame " + std::to_string(frame) + " (" + path + ")";
+}
 
 namespace {
 
@@ -42,7 +46,8 @@ std::vector<std::vector<std::string>> candidates(const std::string& field, const
   const bool single_channel = comps.size() == 1 && name.find('.') != std::string::npos;
   for (const std::string& prefix : {layer.empty() ? std::string() : layer + ".", std::string()}) {
     std::vector<std::string> names;
-    for (const auto& comp : comps) names.push_back(prefix + name + (single_channel ? "" : "." + comp));
+    for (const auto& comp : comps)
+      names.push_back(prefix + name + (single_channel ? "" : "." + comp));
     out.push_back(names);
     if (layer.empty()) break;
   }
@@ -77,7 +82,8 @@ InputFrame open_frame(const std::string& path, int frame, const Params& p) {
       if (!v.is_string()) continue;
       const std::string tail = "." + v.get<std::string>() + "." + field_components(field)[0];
       for (const auto& ch : f.spec.channelnames)
-        if (ch.size() > tail.size() && ch.compare(ch.size() - tail.size(), tail.size(), tail) == 0) {
+        if (ch.size() > tail.size() &&
+            ch.compare(ch.size() - tail.size(), tail.size(), tail) == 0) {
           f.view_layer = ch.substr(0, ch.size() - tail.size());
           break;
         }
@@ -108,14 +114,16 @@ std::vector<std::string> fields_needed(const InputFrame& f, const Params& p) {
   if (geometry) {
     if (!f.has("normal"))
       throw Error(Exit::missing_pass, f.where() + ": missing pass: normal (looked for channels " +
-                                          join(f.wanted.at("normal")) + "; map it with passes.normal)");
+                                          join(f.wanted.at("normal")) +
+                                          "; map it with passes.normal)");
     if (f.has("depth"))
       need.push_back("depth");
     else if (f.has("position"))
       need.push_back("position");
     else
       throw Error(Exit::missing_pass, f.where() + ": missing pass: depth or position (looked for " +
-                                          join(f.wanted.at("depth")) + " and " + join(f.wanted.at("position")) +
+                                          join(f.wanted.at("depth")) + " and " +
+                                          join(f.wanted.at("position")) +
                                           "; map them with passes.depth / passes.position)");
     need.push_back("normal");
   }
@@ -125,31 +133,40 @@ std::vector<std::string> fields_needed(const InputFrame& f, const Params& p) {
 
 namespace {
 
-// Reads the channels of one field as interleaved floats.
-std::vector<float> read_channels(OIIO::ImageInput& in, const InputFrame& f, const std::vector<int>& idx) {
-  const int w = f.spec.width, h = f.spec.height, n = int(idx.size());
-  std::vector<float> out(size_t(w) * h * n);
-  const bool contiguous = [&] {
-    for (int k = 1; k < n; ++k)
-      if (idx[k] != idx[0] + k) return false;
-    return true;
-  }();
-  auto fail = [&](int c) {
-    throw Error(Exit::input, f.where() + ": cannot read channel " + f.spec.channelnames[c] + ": " + in.geterror());
-  };
-  if (contiguous) {
-    if (!in.read_image(0, 0, idx[0], idx[0] + n, OIIO::TypeDesc::FLOAT, out.data())) fail(idx[0]);
-  } else {
-    std::vector<float> one(size_t(w) * h);
-    for (int k = 0; k < n; ++k) {
-      if (!in.read_image(0, 0, idx[k], idx[k] + 1, OIIO::TypeDesc::FLOAT, one.data())) fail(idx[k]);
-      for (size_t i = 0; i < one.size(); ++i) out[i * n + k] = one[i];
+// Reads the channels of several fields in one pass: EXR compresses all channels of a block
+// of scanlines together, so every separate read would decompress the whole file again.
+// Blocks of 64 rows over the smallest channel range holding all fields keep memory bounded.
+std::vector<std::vector<float>> read_channels(OIIO::ImageInput& in, const InputFrame& f,
+                                              const std::vector<std::vector<int>>& fields) {
+  const int w = f.spec.width, h = f.spec.height;
+  int lo = f.spec.nchannels, hi = 0;
+  std::vector<std::vector<float>> out;
+  for (const auto& idx : fields) {
+    for (int c : idx) lo = std::min(lo, c), hi = std::max(hi, c + 1);
+    out.emplace_back(size_t(w) * h * idx.size());
+  }
+  if (fields.empty()) return out;
+  const int n = hi - lo, rows = 64;
+  std::vector<float> block(size_t(w) * rows * n);
+  for (int y0 = 0; y0 < h; y0 += rows) {
+    const int y1 = std::min(h, y0 + rows);
+    if (!in.read_scanlines(0, 0, f.spec.y + y0, f.spec.y + y1, 0, lo, hi, OIIO::TypeDesc::FLOAT,
+                           block.data()))
+      throw Error(Exit::input, f.where() + ": cannot read rows " + std::to_string(y0) + "-" +
+                                   std::to_string(y1 - 1) + ": " + in.geterror());
+    for (size_t k = 0; k < fields.size(); ++k) {
+      const auto& idx = fields[k];
+      const size_t m = idx.size();
+      for (size_t i = 0; i < size_t(w) * (y1 - y0); ++i)
+        for (size_t c = 0; c < m; ++c)
+          out[k][(size_t(y0) * w + i) * m + c] = block[i * n + (idx[c] - lo)];
     }
   }
   return out;
 }
 
-[[noreturn]] void bad_value(const InputFrame& f, int channel, size_t i, float v, const std::string& what) {
+[[noreturn]] void bad_value(const InputFrame& f, int channel, size_t i, float v,
+                            const std::string& what) {
   std::ostringstream s;
   s << f.where() << ": layer " << f.spec.channelnames[channel] << ": " << what << " at pixel ("
     << i % f.spec.width << ", " << i / f.spec.width << "): " << v;
@@ -164,9 +181,13 @@ GBuffer read_fields(const InputFrame& f, const std::vector<std::string>& fields,
   g.height = f.spec.height;
   auto in = OIIO::ImageInput::open(f.path);
   if (!in) throw Error(Exit::input, f.where() + ": cannot read: " + OIIO::geterror());
-  for (const auto& field : fields) {
-    const std::vector<int>& idx = f.channels.at(field);
-    std::vector<float> v = read_channels(*in, f, idx);
+  std::vector<std::vector<int>> indices;
+  for (const auto& field : fields) indices.push_back(f.channels.at(field));
+  std::vector<std::vector<float>> data = read_channels(*in, f, indices);
+  for (size_t k = 0; k < fields.size(); ++k) {
+    const std::string& field = fields[k];
+    const std::vector<int>& idx = indices[k];
+    std::vector<float>& v = data[k];
     if (field == "depth") {
       for (size_t i = 0; i < v.size(); ++i) {
         if (!std::isfinite(v[i])) bad_value(f, idx[0], i, v[i], "non-finite depth");
@@ -180,7 +201,8 @@ GBuffer read_fields(const InputFrame& f, const std::vector<std::string>& fields,
       dst.resize(g.pixels());
       for (size_t i = 0; i < g.pixels(); ++i) {
         for (int k = 0; k < 3; ++k)
-          if (!std::isfinite(v[3 * i + k])) bad_value(f, idx[k], i, v[3 * i + k], "non-finite " + field);
+          if (!std::isfinite(v[3 * i + k]))
+            bad_value(f, idx[k], i, v[3 * i + k], "non-finite " + field);
         dst[i] = {v[3 * i], v[3 * i + 1], v[3 * i + 2]};
       }
     }
@@ -205,16 +227,18 @@ Camera find_camera(const InputFrame& f, GBuffer& g, const Params& p, double max_
     if (cam.reprojection_rms_px > max_rms_px) {
       std::ostringstream s;
       s << f.where() << ": the camera solved from " << join(f.wanted.at("position"))
-        << " reprojects with an RMS error of " << cam.reprojection_rms_px << " px (allowed: " << max_rms_px
-        << " px); provide a camera sidecar " << sidecar << " (samples/blender/export_camera.py writes it)";
+        << " reprojects with an RMS error of " << cam.reprojection_rms_px
+        << " px (allowed: " << max_rms_px << " px); provide a camera sidecar " << sidecar
+        << " (samples/blender/export_camera.py writes it)";
       throw Error(Exit::camera, s.str());
     }
   } else {
-    throw Error(Exit::camera, f.where() + ": no camera: none of a sidecar " + sidecar +
-                                  " (samples/blender/export_camera.py writes it), the EXR attributes "
-                                  "worldToCamera and worldToNDC (" +
-                                  camera_attribute_status(f.spec) + "), or a Position pass (looked for " +
-                                  join(f.wanted.at("position")) + ") to solve it from");
+    throw Error(Exit::camera,
+                f.where() + ": no camera: none of a sidecar " + sidecar +
+                    " (samples/blender/export_camera.py writes it), the EXR attributes "
+                    "worldToCamera and worldToNDC (" +
+                    camera_attribute_status(f.spec) + "), or a Position pass (looked for " +
+                    join(f.wanted.at("position")) + ") to solve it from");
   }
   if (cam.width != f.spec.width || cam.height != f.spec.height) {
     std::ostringstream s;

@@ -8,12 +8,12 @@
 // layer prefix), or to an explicit list of channel names (other renderers).
 #pragma once
 
+#include <OpenImageIO/imageio.h>
+
 #include <map>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <OpenImageIO/imageio.h>
 
 #include "hbil/camera.h"
 #include "hbil/gbuffer.h"
@@ -28,8 +28,9 @@ struct InputFrame {
   std::string path;
   int frame = 0;
   OIIO::ImageSpec spec;
-  std::string view_layer;                                   // "" when channels have no layer
-  std::map<std::string, std::vector<int>> channels;         // field -> channel indices (present fields only)
+  std::string view_layer;  // "" when channels have no layer
+  std::map<std::string, std::vector<int>>
+      channels;  // field -> channel indices (present fields only)
   std::map<std::string, std::vector<std::string>> wanted;  // field -> channel names looked for
 
   bool has(const std::string& field) const { return channels.count(field) > 0; }

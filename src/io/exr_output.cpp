@@ -5,7 +5,6 @@
 
 #include <atomic>
 #include <filesystem>
-
 #include <nlohmann/json.hpp>
 
 #include "hbil/error.h"
@@ -21,7 +20,9 @@ OutputImage make_output(const AoFrame& f, const Params& p) {
   img.height = f.height;
   for (const auto& o : p.outputs) {
     if (o == "ao") img.channels.push_back("ao.Y");
-    if (o == "bentcone") img.channels.insert(img.channels.end(), {"bentcone.X", "bentcone.Y", "bentcone.Z", "bentcone.W"});
+    if (o == "bentcone")
+      img.channels.insert(img.channels.end(),
+                          {"bentcone.X", "bentcone.Y", "bentcone.Z", "bentcone.W"});
   }
   const size_t n = img.channels.size(), pixels = size_t(f.width) * f.height;
   img.pixels.resize(pixels * n);
@@ -58,16 +59,20 @@ std::string camera_json(const Camera& c) {
 }
 
 std::string write_temporary(const std::string& final_path, const OutputImage& img,
-                            const OIIO::ImageSpec& input_header, const Params& p, const Camera& cam) {
+                            const OIIO::ImageSpec& input_header, const Params& p,
+                            const Camera& cam) {
   const fs::path final_p(final_path);
   std::error_code ec;
   if (final_p.has_parent_path()) {
     fs::create_directories(final_p.parent_path(), ec);
-    if (ec) throw Error(Exit::output, final_path + ": cannot create folder " + final_p.parent_path().string() + ": " + ec.message());
+    if (ec)
+      throw Error(Exit::output, final_path + ": cannot create folder " +
+                                    final_p.parent_path().string() + ": " + ec.message());
   }
   static std::atomic<int> counter{0};
-  const fs::path tmp = final_p.parent_path() / ("." + final_p.stem().string() + ".hbil-tmp-" +
-                                                std::to_string(getpid()) + "-" + std::to_string(counter++) + ".exr");
+  const fs::path tmp =
+      final_p.parent_path() / ("." + final_p.stem().string() + ".hbil-tmp-" +
+                               std::to_string(getpid()) + "-" + std::to_string(counter++) + ".exr");
   OIIO::ImageSpec spec(img.width, img.height, int(img.channels.size()), OIIO::TypeDesc::FLOAT);
   spec.channelnames = img.channels;
   spec.alpha_channel = -1;
@@ -76,8 +81,8 @@ std::string write_temporary(const std::string& final_path, const OutputImage& im
   for (const OIIO::ParamValue& a : input_header.extra_attribs) {
     const std::string name = a.name().string();
     if (name.rfind("oiio:", 0) == 0 || name.rfind("openexr:", 0) == 0 || name == "compression" ||
-        name == "channelformats" || name == "worldtocamera" || name == "worldtoNDC" || name == "worldToCamera" ||
-        name == "worldToNDC" || name.rfind("hbil:", 0) == 0)
+        name == "channelformats" || name == "worldtocamera" || name == "worldtoNDC" ||
+        name == "worldToCamera" || name == "worldToNDC" || name.rfind("hbil:", 0) == 0)
       continue;
     spec.attribute(name, a.type(), a.data());
   }
@@ -88,9 +93,10 @@ std::string write_temporary(const std::string& final_path, const OutputImage& im
   set_camera_attributes(spec, cam);
 
   auto out = OIIO::ImageOutput::create(tmp.string());
-  if (!out) throw Error(Exit::output, final_path + ": cannot create an EXR writer: " + OIIO::geterror());
-  if (!out->open(tmp.string(), spec) || !out->write_image(OIIO::TypeDesc::FLOAT, img.pixels.data()) ||
-      !out->close()) {
+  if (!out)
+    throw Error(Exit::output, final_path + ": cannot create an EXR writer: " + OIIO::geterror());
+  if (!out->open(tmp.string(), spec) ||
+      !out->write_image(OIIO::TypeDesc::FLOAT, img.pixels.data()) || !out->close()) {
     const std::string why = out->geterror();
     fs::remove(tmp, ec);
     throw Error(Exit::output, final_path + ": cannot write: " + why);
@@ -103,7 +109,8 @@ void commit(const std::string& temporary, const std::string& final_path) {
   fs::rename(temporary, final_path, ec);
   if (ec) {
     fs::remove(temporary, ec);
-    throw Error(Exit::output, final_path + ": cannot rename the finished frame into place: " + ec.message());
+    throw Error(Exit::output,
+                final_path + ": cannot rename the finished frame into place: " + ec.message());
   }
 }
 

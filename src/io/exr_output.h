@@ -9,10 +9,10 @@
 // what was there before.
 #pragma once
 
+#include <OpenImageIO/imageio.h>
+
 #include <string>
 #include <vector>
-
-#include <OpenImageIO/imageio.h>
 
 #include "hbil/ao_frame.h"
 #include "hbil/camera.h"
@@ -35,7 +35,8 @@ std::string camera_json(const Camera& c);
 // Writes `img` to a temporary file beside `final_path` (creating its folder) and returns
 // the temporary's path. Throws Error(Exit::output).
 std::string write_temporary(const std::string& final_path, const OutputImage& img,
-                            const OIIO::ImageSpec& input_header, const Params& p, const Camera& cam);
+                            const OIIO::ImageSpec& input_header, const Params& p,
+                            const Camera& cam);
 
 // Renames a temporary into place (replacing an older file). Throws Error(Exit::output).
 void commit(const std::string& temporary, const std::string& final_path);
