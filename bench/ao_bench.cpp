@@ -42,7 +42,7 @@ void BM_AoFrame(benchmark::State& state) {
   const Scene& s = scene(w, h);
   const ViewGBuffer v = make_view_gbuffer(s.g, s.cam, p);
   for (auto _ : state) {
-    AoFrame f = compute_ao_frame(v, s.g.normal, s.cam, p);
+    AoFrame f = compute_ao_frame(v, s.g, s.cam, p);
     benchmark::DoNotOptimize(f.ao.data());
   }
   const double pixels = double(w) * h;

@@ -172,8 +172,8 @@ TEST(Interleave, DeinterleavedBuffersMatchStridedReadInPlace) {
   const Params p;
   const ViewGBuffer v = make_view_gbuffer(g, cam, p);
   const HorizonConfig c = make_horizon_config(p, cam);
-  const HorizonImage a = horizon_interleaved(v, c, 2, true),
-                     b = horizon_interleaved(v, c, 2, false);
+  const HorizonImage a = horizon_interleaved(v, c, 2, nullptr, true),
+                     b = horizon_interleaved(v, c, 2, nullptr, false);
   ASSERT_EQ(a.ao.size(), b.ao.size());
   EXPECT_EQ(0, std::memcmp(a.ao.data(), b.ao.data(), a.ao.size() * sizeof(float)));
   EXPECT_EQ(0, std::memcmp(a.bent.data(), b.bent.data(), a.bent.size() * sizeof(Vec3)));

@@ -16,14 +16,23 @@ struct AoFrame {
   std::vector<float> ao;        // cosine-weighted visibility (eq. 9), 1 = unoccluded
   std::vector<Vec3> bent;       // unit bent normal, world space (eq. 4-6)
   std::vector<float> cone_cos;  // cos of the bent cone's half-angle, 1 − Ω/2π (eq. 12)
+  // With the outputs irradiance or indirect (empty otherwise):
+  std::vector<Vec3> irradiance;  // E_near / π: the units of Blender's DiffInd
+  std::vector<Vec3> indirect;    // DiffCol × E_near / π: comparable to DiffCol × DiffInd
 };
+
+// The diffusely reflected radiance a pixel sends to its neighbours (HBIL eq. 16-17):
+// DiffCol × (DiffDir + irradiance) + Emit, with irradiance = E/π of the previous bounce
+// (empty: none yet).
+std::vector<Vec3> source_radiance(const GBuffer& g, const std::vector<Vec3>& irradiance);
 
 // Background pixels get ao = 1, bent = the input normal as stored (zero for Blender's
 // background) and cone_cos = 0 (a full hemisphere).
 AoFrame compute_ao_frame(const GBuffer& g, const Camera& cam, const Params& p);
 
 // The same from an already prepared view-space G-buffer (used by tests and benchmarks).
-AoFrame compute_ao_frame(const ViewGBuffer& v, const std::vector<Vec3>& world_normal,
-                         const Camera& cam, const Params& p);
+// `g` supplies the world normals and, for irradiance, the colour fields.
+AoFrame compute_ao_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& cam,
+                         const Params& p);
 
 }  // namespace hbil

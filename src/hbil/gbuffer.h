@@ -17,6 +17,9 @@ struct GBuffer {
   std::vector<Vec3> normal;    // world space, pixel-filtered (may be shorter than 1)
   std::vector<Vec3> position;  // world space
   std::vector<float> alpha;    // coverage; 0 = background
+  std::vector<Vec3> diffcol;   // diffuse albedo (Blender DiffCol)
+  std::vector<Vec3> diffdir;   // direct diffuse irradiance / π (Blender DiffDir)
+  std::vector<Vec3> emit;      // emitted radiance (Blender Emit)
 
   size_t pixels() const { return size_t(width) * size_t(height); }
 };

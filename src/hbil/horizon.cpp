@@ -2,7 +2,9 @@
 #include "hbil/horizon.h"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
+#include <cstdint>
 #include <numbers>
 
 namespace hbil {
@@ -24,6 +26,9 @@ HorizonConfig make_horizon_config(const Params& p, const Camera& cam) {
   c.step_power = float(p.step_power);
   c.fx = float(cam.fx);
   c.fy = float(cam.fy);
+  c.bitmask = p.method == "bitmask";
+  c.thickness = float(p.thickness);
+  c.thickness_growth = float(p.thickness_growth);
   return c;
 }
 
@@ -51,6 +56,28 @@ SliceTerms integrate_slice(float theta0, float theta1, float nx, float ny) {
   return {g1.ao - g0.ao, g1.vis - g0.vis, g1.bx - g0.bx, g1.by - g0.by};
 }
 
+namespace {
+
+// ∫_0^θ f(ω'(θ))|sin θ| dθ of the four slice integrands at one angle (see integrate_slice).
+struct Antiderivative {
+  float ao, vis, bx, by;
+};
+inline Antiderivative antiderivative(float t, float s, float c, float nx, float ny) {
+  const float a = sgn(t), sin2 = (t - s * c) * 0.5f, sincos = s * s * 0.5f;
+  return {a * (nx * sin2 + ny * sincos), a * (1.f - c), a * sin2, a * sincos};
+}
+
+// HBIL §3.4 rejection filter: a neighbour whose normal n' faces away from the receiver
+// (−n'·ω_i < 0, ω_i from receiver to neighbour) occludes but sends no light. The fade
+// smoothstep(−0.1, 0.1, −n'·ω_i) accepts neighbours seen at up to ~84 degrees from their
+// normal fully and rejects those facing away by more than ~96 degrees.
+inline float facing_weight(const Vec3& n_s, const Vec3& w_i) {
+  const float x = std::clamp((-dot(n_s, w_i) + 0.1f) / 0.2f, 0.f, 1.f);
+  return x * x * (3.f - 2.f * x);
+}
+
+}  // namespace
+
 PixelSums march_pixel(const SampleView& view, int i, int j, const Vec3& P, const Vec3& n,
                       const float* phi, int n_slices, const float* fraction,
                       const HorizonConfig& c) {
@@ -63,6 +90,9 @@ PixelSums march_pixel(const SampleView& view, int i, int j, const Vec3& P, const
   const float r_tex = std::min(c.radius * focal / (P.z * float(view.stride)),
                                std::hypot(float(view.width), float(view.height)));
   const float r2 = c.radius * c.radius;
+  const bool gather = view.radiance != nullptr;
+  constexpr int kSectors = 32;
+  constexpr float kSectorWidth = kPi / kSectors;
   // Orthonormal basis of the plane orthogonal to ω_o; slice s has D = cos φ e1 + sin φ e2.
   const Vec3 e1 = normalize_or_zero(Vec3{1, 0, 0} - wo * wo.x);
   const Vec3 e2 = cross(wo, e1);
@@ -77,12 +107,32 @@ PixelSums march_pixel(const SampleView& view, int i, int j, const Vec3& P, const
     const Vec3 dv{dx / c.fx, dy / c.fy, 0.f};     // change of the z = 1 ray per pixel along it
     const float nx = dot(n, D), ny = dot(n, wo);  // eq. 2: the normal projected on the slice
     const float gamma = std::atan2(nx, ny);       // angle of n' from ω_o
+    auto G = [&](float t) { return antiderivative(t, std::sin(t), std::cos(t), nx, ny); };
 
-    // cos of the highest horizon seen on each side; -1 = nothing found yet.
-    float max_cos[2] = {-1.f, -1.f};
+    // Horizon method: the current horizons, starting at the tangent plane (§2.1).
+    float theta1 = std::min(gamma + 0.5f * kPi, kPi), theta0 = std::max(gamma - 0.5f * kPi, -kPi);
+    // Bitmask method: 32 sectors over [γ − π/2, γ + π/2]; sector k's cosine-weighted
+    // integral is W[k] = G(b_k) − G(a_k), so AO keeps the definition of eq. 9.
+    std::uint32_t occluded = 0;
+    Antiderivative bound[kSectors + 1];
+    const float sector0 = gamma - 0.5f * kPi;
+    if (c.bitmask) {
+      // Boundaries by rotation: (sin, cos) of sector0 + kΔ without 33 sin/cos pairs.
+      const float cd = std::cos(kSectorWidth), sd = std::sin(kSectorWidth);
+      float sb = std::sin(sector0), cb = std::cos(sector0);
+      for (int k = 0; k <= kSectors; ++k) {
+        bound[k] = antiderivative(sector0 + k * kSectorWidth, sb, cb, nx, ny);
+        const float sn = sb * cd + cb * sd;
+        cb = cb * cd - sb * sd;
+        sb = sn;
+      }
+    }
+    Vec3 irradiance;
+
     if (r_tex >= 1.f) {
       for (int side = 0; side < 2; ++side) {
         const float sx = side == 0 ? dx : -dx, sy = side == 0 ? dy : -dy;
+        const float sign = side == 0 ? 1.f : -1.f;  // θ > 0 on the +D side
         for (int k = 0; k < c.steps; ++k) {
           const float o = 1.f + (r_tex - 1.f) * fraction[k];
           const int oi = int(std::floor(sx * o + 0.5f)), oj = int(std::floor(sy * o + 0.5f));
@@ -93,25 +143,73 @@ PixelSums march_pixel(const SampleView& view, int i, int j, const Vec3& P, const
           Vec3 S = view.position[k_s];
           // Move S along its tangent plane onto the ray through the exact point of the line
           // (see horizon.h): that ray lies in the slice plane.
-          const Vec3 ray = ray_P + dv * (side == 0 ? o : -o) * float(view.stride);
+          const Vec3 ray = ray_P + dv * (sign * o) * float(view.stride);
           const Vec3& n_s = view.normal[k_s];
           const float denom = dot(ray, n_s);
           if (std::fabs(denom) > kGrazing * length(ray)) S = ray * (dot(S, n_s) / denom);
           const Vec3 d3 = S - P;  // background has z = 3e38, n = 0: |d3| > radius
           const float dist2 = dot(d3, d3);
           if (!(dist2 < r2) || dist2 <= 0.f) continue;
-          max_cos[side] = std::max(max_cos[side], dot(d3, wo) / std::sqrt(dist2));
+          const float dist = std::sqrt(dist2);
+          const float theta_f = sign * std::acos(std::clamp(dot(d3, wo) / dist, -1.f, 1.f));
+          // Light the sample sends towards P (eq. 18: L_d(x') over the band it covers).
+          auto radiance = [&] {
+            return gather ? view.radiance[k_s] * facing_weight(n_s, d3 / dist) : Vec3{};
+          };
+          if (!c.bitmask) {
+            // A rise of the horizon occludes, and is lit by, the band it sweeps (eq. 18).
+            float lo, hi;
+            if (side == 0) {
+              if (!(theta_f < theta1)) continue;
+              lo = theta_f, hi = theta1, theta1 = theta_f;
+            } else {
+              if (!(theta_f > theta0)) continue;
+              lo = theta0, hi = theta_f, theta0 = theta_f;
+            }
+            if (gather) irradiance += radiance() * (G(hi).ao - G(lo).ao);
+          } else {
+            // Therrien et al. 2023, Algorithm 1: the sample is an occluder of thickness t
+            // along its view ray; it covers [θf, θb] and lights the sectors it newly covers.
+            const float t = c.thickness + c.thickness_growth * S.z;
+            const Vec3 back = S + S * (t / length(S)) - P;
+            const float theta_b =
+                sign * std::acos(std::clamp(dot(back, wo) / length(back), -1.f, 1.f));
+            const float lo = (std::min(theta_f, theta_b) - sector0) / kSectorWidth;
+            const float hi = (std::max(theta_f, theta_b) - sector0) / kSectorWidth;
+            // "Round" criterion: a sector counts when at least half covered.
+            const int a = std::clamp(int(std::floor(lo + 0.5f)), 0, kSectors);
+            const int b = std::clamp(int(std::floor(hi + 0.5f)), 0, kSectors);
+            if (b <= a) continue;
+            const std::uint32_t mask = (b - a == 32 ? ~0u : ((1u << (b - a)) - 1u)) << a;
+            std::uint32_t fresh = mask & ~occluded;
+            occluded |= mask;
+            if (gather && fresh) {
+              float w = 0.f;
+              for (; fresh; fresh &= fresh - 1) {
+                const int q = std::countr_zero(fresh);
+                w += bound[q + 1].ao - bound[q].ao;
+              }
+              irradiance += radiance() * w;
+            }
+          }
         }
       }
     }
-    // §2.1: the horizon never lies below the tangent plane, |θ − γ| <= π/2.
-    float theta1 = std::min(std::acos(std::clamp(max_cos[0], -1.f, 1.f)), gamma + 0.5f * kPi);
-    float theta0 = std::max(-std::acos(std::clamp(max_cos[1], -1.f, 1.f)), gamma - 0.5f * kPi);
-    theta1 = std::max(theta1, theta0);
-    const SliceTerms t = integrate_slice(theta0, theta1, nx, ny);
-    acc.ao += t.ao;
-    acc.vis += t.vis;
-    acc.bent += D * t.bx + wo * t.by;
+    if (!c.bitmask) {
+      theta1 = std::max(theta1, theta0);
+      const SliceTerms t = integrate_slice(theta0, theta1, nx, ny);
+      acc.ao += t.ao;
+      acc.vis += t.vis;
+      acc.bent += D * t.bx + wo * t.by;
+    } else {
+      for (int k = 0; k < kSectors; ++k) {
+        if (occluded >> k & 1u) continue;
+        acc.ao += bound[k + 1].ao - bound[k].ao;
+        acc.vis += bound[k + 1].vis - bound[k].vis;
+        acc.bent += D * (bound[k + 1].bx - bound[k].bx) + wo * (bound[k + 1].by - bound[k].by);
+      }
+    }
+    acc.irradiance += irradiance;
   }
   return acc;
 }

@@ -48,6 +48,8 @@ struct HorizonConfig {
   int steps = 12;        // per side
   float step_power = 2;  // sample spacing exponent
   float fx = 1, fy = 1;  // full-resolution focal lengths, pixels
+  bool bitmask = false;  // visibility bitmask (Therrien et al. 2023) instead of two horizons
+  float thickness = 0.5f, thickness_growth = 0;  // bitmask occluder thickness: t + growth * z
 };
 HorizonConfig make_horizon_config(const Params& p, const Camera& cam);
 
@@ -69,15 +71,17 @@ struct SampleView {
   const Vec3* normal = nullptr;
   int width = 0, height = 0;
   std::ptrdiff_t col = 1, row = 0;
-  int stride = 1;  // full-resolution pixels per texel (4 when deinterleaved)
+  int stride = 1;                  // full-resolution pixels per texel (4 when deinterleaved)
+  const Vec3* radiance = nullptr;  // source radiance L_d (eq. 16); null: no gathering
   std::ptrdiff_t index(int i, int j) const { return j * row + i * col; }
 };
 
 // Sums over the slices of one pixel (means are taken by the caller).
 struct PixelSums {
-  float ao = 0;   // Σ ao_i
-  float vis = 0;  // Σ vis_i
-  Vec3 bent;      // Σ (D_i bx_i + ω_o by_i), view space
+  float ao = 0;     // Σ ao_i
+  float vis = 0;    // Σ vis_i
+  Vec3 bent;        // Σ (D_i bx_i + ω_o by_i), view space
+  Vec3 irradiance;  // Σ over slices of Σ_bands L_d(x') ΔI (eq. 18): mean = E_near / π
 };
 
 // Sample positions along a slice as fractions of the search radius: ((k + jitter)/steps)^power

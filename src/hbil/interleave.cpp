@@ -17,15 +17,17 @@ void store(HorizonImage& out, size_t idx, const PixelSums& s, int n_slices) {
   out.ao[idx] = s.ao / float(n_slices);
   out.vis[idx] = s.vis / float(2 * n_slices);
   out.bent[idx] = s.bent / float(n_slices);
+  if (!out.irradiance.empty()) out.irradiance[idx] = s.irradiance / float(n_slices);
 }
 
-HorizonImage blank(const ViewGBuffer& g) {
+HorizonImage blank(const ViewGBuffer& g, bool gather) {
   HorizonImage out;
   out.width = g.width;
   out.height = g.height;
   out.ao.assign(g.pixels(), 1.f);
   out.vis.assign(g.pixels(), 1.f);
   out.bent.assign(g.pixels(), Vec3{});
+  if (gather) out.irradiance.assign(g.pixels(), Vec3{});
   return out;
 }
 
@@ -41,12 +43,20 @@ float interleaved_jitter(int phase) {
   return (float(kBayer4[transposed]) + 0.5f) / 16.f;
 }
 
-HorizonImage horizon_full(const ViewGBuffer& g, const HorizonConfig& c, int slices) {
-  HorizonImage out = blank(g);
+HorizonImage horizon_full(const ViewGBuffer& g, const HorizonConfig& c, int slices,
+                          const std::vector<Vec3>* radiance) {
+  HorizonImage out = blank(g, radiance != nullptr);
   std::vector<float> phi(slices);
   for (int s = 0; s < slices; ++s) phi[s] = kPi * (float(s) + 0.5f) / float(slices);
   const std::vector<float> fraction = step_fractions(c, 0.5f);
-  const SampleView view{g.position.data(), g.normal.data(), g.width, g.height, 1, g.width, 1};
+  const SampleView view{g.position.data(),
+                        g.normal.data(),
+                        g.width,
+                        g.height,
+                        1,
+                        g.width,
+                        1,
+                        radiance ? radiance->data() : nullptr};
   tbb::parallel_for(0, g.height, [&](int y) {
     for (int x = 0; x < g.width; ++x) {
       const size_t i = size_t(y) * g.width + x;
@@ -61,12 +71,12 @@ HorizonImage horizon_full(const ViewGBuffer& g, const HorizonConfig& c, int slic
 }
 
 HorizonImage horizon_interleaved(const ViewGBuffer& g, const HorizonConfig& c, int slices,
-                                 bool copy_subbuffers) {
-  HorizonImage out = blank(g);
+                                 const std::vector<Vec3>* radiance, bool copy_subbuffers) {
+  HorizonImage out = blank(g, radiance != nullptr);
   // Sub-buffer of phase (ox, oy): texel (i, j) is full-resolution pixel (4i + ox, 4j + oy).
   struct Sub {
     int ox, oy, w, h;
-    std::vector<Vec3> pos, nrm;  // contiguous copies (empty when reading in place)
+    std::vector<Vec3> pos, nrm, rad;  // contiguous copies (empty when reading in place)
     SampleView view;
     std::vector<float> phi;
     std::vector<float> fraction;  // step positions, with this phase's jitter
@@ -89,13 +99,16 @@ HorizonImage horizon_interleaved(const ViewGBuffer& g, const HorizonConfig& c, i
     if (copy_subbuffers) {
       s.pos.resize(size_t(s.w) * s.h);
       s.nrm.resize(size_t(s.w) * s.h);
+      if (radiance) s.rad.resize(size_t(s.w) * s.h);
       for (int j = 0; j < s.h; ++j)
         for (int i = 0; i < s.w; ++i) {
           const size_t src = size_t(4 * j + s.oy) * g.width + (4 * i + s.ox);
           s.pos[size_t(j) * s.w + i] = g.position[src];
           s.nrm[size_t(j) * s.w + i] = g.normal[src];
+          if (radiance) s.rad[size_t(j) * s.w + i] = (*radiance)[src];
         }
-      s.view = SampleView{s.pos.data(), s.nrm.data(), s.w, s.h, 1, s.w, 4};
+      s.view = SampleView{
+          s.pos.data(), s.nrm.data(), s.w, s.h, 1, s.w, 4, radiance ? s.rad.data() : nullptr};
     } else {
       const size_t first = size_t(s.oy) * g.width + s.ox;
       s.view = SampleView{g.position.data() + first,

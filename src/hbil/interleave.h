@@ -22,9 +22,10 @@ namespace hbil {
 // Per-pixel horizon results before the spatial filter: means over the pixel's slices.
 struct HorizonImage {
   int width = 0, height = 0;
-  std::vector<float> ao;   // cosine-weighted visibility (eq. 9), 1 = unoccluded
-  std::vector<float> vis;  // uniform visibility Ω / 2π
-  std::vector<Vec3> bent;  // mean slice bent vector, view space, not normalised
+  std::vector<float> ao;         // cosine-weighted visibility (eq. 9), 1 = unoccluded
+  std::vector<float> vis;        // uniform visibility Ω / 2π
+  std::vector<Vec3> bent;        // mean slice bent vector, view space, not normalised
+  std::vector<Vec3> irradiance;  // E_near / π (eq. 16-18); empty without a radiance source
 };
 
 // Slice angles and step jitter of one of the 16 pixels of the 4x4 block
@@ -33,11 +34,14 @@ void interleaved_angles(int phase, int slices, float* phi);
 float interleaved_jitter(int phase);
 
 // Every pixel, all slices, full resolution (Params::interleave = false).
-HorizonImage horizon_full(const ViewGBuffer& g, const HorizonConfig& c, int slices);
+// `radiance` (one L_d per pixel, or null) is gathered into HorizonImage::irradiance.
+HorizonImage horizon_full(const ViewGBuffer& g, const HorizonConfig& c, int slices,
+                          const std::vector<Vec3>* radiance = nullptr);
 
 // The 4x4 interleaved search. With copy_subbuffers = false the sub-buffers are read in place
 // through strided views (the plain version the tests compare the copying one against).
 HorizonImage horizon_interleaved(const ViewGBuffer& g, const HorizonConfig& c, int slices,
+                                 const std::vector<Vec3>* radiance = nullptr,
                                  bool copy_subbuffers = true);
 
 }  // namespace hbil

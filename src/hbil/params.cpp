@@ -12,8 +12,9 @@ namespace hbil {
 using nlohmann::json;
 
 std::map<std::string, json> Params::default_passes() {
-  return {
-      {"depth", "Depth"}, {"normal", "Normal"}, {"position", "Position"}, {"alpha", "Combined.A"}};
+  return {{"depth", "Depth"},      {"normal", "Normal"},   {"position", "Position"},
+          {"alpha", "Combined.A"}, {"diffcol", "DiffCol"}, {"diffdir", "DiffDir"},
+          {"emit", "Emit"}};
 }
 
 bool Params::wants(const std::string& output) const {
@@ -40,6 +41,13 @@ const std::vector<ParamInfo>& params_table() {
       {"depth_tolerance", &Params::depth_tolerance, 0, 1, "relative",
        "spatial filter: neighbours farther from the pixel's tangent plane than this fraction of "
        "its depth are not averaged (nor those whose normal is more than 37 degrees off)"},
+      {"thickness", &Params::thickness, 0, 1e6, "world units",
+       "method bitmask: every depth sample occludes like a slab this thick behind it (HBIL's "
+       "horizon is the limit of infinite thickness)"},
+      {"thickness_growth", &Params::thickness_growth, 0, 1e3, "per world unit",
+       "method bitmask: thickness added per world unit of the sample's depth"},
+      {"bounces", &Params::bounces, 1, 16, "count",
+       "in-frame bounces of indirect light: bounce k gathers the outgoing radiance of bounce k-1"},
       {"background_depth", &Params::background_depth, 1e-6, 1e30, "world units",
        "depth at or beyond which a pixel is background (Blender writes 1e10)"},
   };
@@ -47,12 +55,13 @@ const std::vector<ParamInfo>& params_table() {
 }
 
 const std::vector<std::string>& gbuffer_fields() {
-  static const std::vector<std::string> f = {"depth", "normal", "position", "alpha"};
+  static const std::vector<std::string> f = {"depth",   "normal",  "position", "alpha",
+                                             "diffcol", "diffdir", "emit"};
   return f;
 }
 
 const std::vector<std::string>& known_outputs() {
-  static const std::vector<std::string> o = {"ao", "bentcone"};
+  static const std::vector<std::string> o = {"ao", "bentcone", "irradiance", "indirect"};
   return o;
 }
 
@@ -61,6 +70,7 @@ json to_json(const Params& p) {
   for (const ParamInfo& info : params_table()) {
     std::visit([&](auto m) { j[info.key] = p.*m; }, info.member);
   }
+  j["method"] = p.method;
   j["view_layer"] = p.view_layer;
   j["passes"] = p.passes;
   j["outputs"] = p.outputs;
@@ -112,6 +122,10 @@ Params params_from_json(const json& j, const std::string& where, Params p) {
                             [&](const ParamInfo& i) { return key == i.key; });
     if (row != params_table().end()) {
       read_number(p, *row, v, where);
+    } else if (key == "method") {
+      if (!v.is_string())
+        fail(where, "key 'method' must be \"horizon\" or \"bitmask\", got " + v.dump());
+      p.method = v.get<std::string>();
     } else if (key == "view_layer") {
       if (!v.is_string()) fail(where, "key 'view_layer' must be a string, got " + v.dump());
       p.view_layer = v.get<std::string>();
@@ -142,7 +156,7 @@ Params params_from_json(const json& j, const std::string& where, Params p) {
     } else {
       std::vector<std::string> keys;
       for (const auto& i : params_table()) keys.push_back(i.key);
-      keys.insert(keys.end(), {"view_layer", "passes", "outputs"});
+      keys.insert(keys.end(), {"method", "view_layer", "passes", "outputs"});
       fail(where, "unknown key '" + key + "' (known: " + allowed_list(keys) + ")");
     }
   }
@@ -167,6 +181,8 @@ void validate(const Params& p, const std::string& where) {
         },
         info.member);
   }
+  if (p.method != "horizon" && p.method != "bitmask")
+    fail(where, "key 'method' = \"" + p.method + "\" is not one of \"horizon\", \"bitmask\"");
   if (p.outputs.empty()) fail(where, "key 'outputs' is empty: nothing to compute");
   for (const auto& o : p.outputs) {
     const auto& k = known_outputs();

@@ -26,6 +26,12 @@ struct Params {
   bool spatial_filter = true;  // depth-aware 4x4 filter after re-interleaving
   double depth_tolerance = 0.05;  // spatial filter: relative depth difference still averaged
 
+  // --- Occlusion model and indirect light ---
+  std::string method = "horizon";  // "horizon" (HBIL) or "bitmask" (Therrien et al. 2023)
+  double thickness = 0.5;          // bitmask: occluder thickness behind each sample, world units
+  double thickness_growth = 0.0;   // bitmask: extra thickness per world unit of sample depth
+  int bounces = 1;                 // in-frame bounces of indirect light (1 = one bounce)
+
   // --- Input ---
   double background_depth = 1e9;  // depth >= this (Blender: 1e10) is background
   std::string view_layer;         // "" = detect (the layer holding Depth or Normal)

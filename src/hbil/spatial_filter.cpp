@@ -21,7 +21,8 @@ HorizonImage spatial_filter(const ViewGBuffer& g, const HorizonImage& in, float 
       const Vec3& n = g.normal[c];
       const float tol = depth_tolerance * P.z;
       float ao = 0, vis = 0, w = 0;
-      Vec3 bent;
+      Vec3 bent, irr;
+      const bool gather = !in.irradiance.empty();
       for (int yy = y - 1; yy <= y + 2; ++yy) {
         if (yy < 0 || yy >= g.height) continue;
         for (int xx = x - 1; xx <= x + 2; ++xx) {
@@ -33,6 +34,7 @@ HorizonImage spatial_filter(const ViewGBuffer& g, const HorizonImage& in, float 
           ao += in.ao[k];
           vis += in.vis[k];
           bent += in.bent[k];
+          if (gather) irr += in.irradiance[k];
           w += 1.f;
         }
       }
@@ -40,6 +42,7 @@ HorizonImage spatial_filter(const ViewGBuffer& g, const HorizonImage& in, float 
       out.ao[c] = ao / w;
       out.vis[c] = vis / w;
       out.bent[c] = bent / w;
+      if (gather) out.irradiance[c] = irr / w;
     }
   });
   return out;

@@ -14,10 +14,10 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 
 const std::vector<std::string>& field_components(const std::string& field) {
-  static const std::map<std::string, std::vector<std::string>> c = {{"depth", {"Z"}},
-                                                                    {"normal", {"X", "Y", "Z"}},
-                                                                    {"position", {"X", "Y", "Z"}},
-                                                                    {"alpha", {"A"}}};
+  static const std::map<std::string, std::vector<std::string>> c = {
+      {"depth", {"Z"}},         {"normal", {"X", "Y", "Z"}},  {"position", {"X", "Y", "Z"}},
+      {"alpha", {"A"}},         {"diffcol", {"R", "G", "B"}}, {"diffdir", {"R", "G", "B"}},
+      {"emit", {"R", "G", "B"}}};
   return c.at(field);
 }
 
@@ -110,7 +110,7 @@ InputFrame open_frame(const std::string& path, int frame, const Params& p) {
 
 std::vector<std::string> fields_needed(const InputFrame& f, const Params& p) {
   std::vector<std::string> need;
-  const bool geometry = p.wants("ao") || p.wants("bentcone");
+  const bool geometry = !p.outputs.empty();  // every output comes from the horizon search
   if (geometry) {
     if (!f.has("normal"))
       throw Error(Exit::missing_pass, f.where() + ": missing pass: normal (looked for channels " +
@@ -126,6 +126,17 @@ std::vector<std::string> fields_needed(const InputFrame& f, const Params& p) {
                                           join(f.wanted.at("position")) +
                                           "; map them with passes.depth / passes.position)");
     need.push_back("normal");
+  }
+  if (p.wants("irradiance") || p.wants("indirect")) {
+    // Source radiance DiffCol × DiffDir + Emit (HBIL eq. 16-17); Emit is optional.
+    for (const char* field : {"diffcol", "diffdir"})
+      if (!f.has(field))
+        throw Error(Exit::missing_pass,
+                    f.where() + ": missing pass: " + field + " (looked for channels " +
+                        join(f.wanted.at(field)) +
+                        "; needed by irradiance and indirect; map it with passes." + field + ")");
+    need.insert(need.end(), {"diffcol", "diffdir"});
+    if (f.has("emit")) need.push_back("emit");
   }
   if (f.has("alpha")) need.push_back("alpha");
   return need;
@@ -197,7 +208,11 @@ GBuffer read_fields(const InputFrame& f, const std::vector<std::string>& fields,
     } else if (field == "alpha") {
       g.alpha = std::move(v);
     } else {
-      std::vector<Vec3>& dst = field == "normal" ? g.normal : g.position;
+      std::vector<Vec3>& dst = field == "normal"     ? g.normal
+                               : field == "position" ? g.position
+                               : field == "diffcol"  ? g.diffcol
+                               : field == "diffdir"  ? g.diffdir
+                                                     : g.emit;
       dst.resize(g.pixels());
       for (size_t i = 0; i < g.pixels(); ++i) {
         for (int k = 0; k < 3; ++k)

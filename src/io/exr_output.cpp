@@ -23,6 +23,10 @@ OutputImage make_output(const AoFrame& f, const Params& p) {
     if (o == "bentcone")
       img.channels.insert(img.channels.end(),
                           {"bentcone.X", "bentcone.Y", "bentcone.Z", "bentcone.W"});
+    if (o == "irradiance")
+      img.channels.insert(img.channels.end(), {"irradiance.R", "irradiance.G", "irradiance.B"});
+    if (o == "indirect")
+      img.channels.insert(img.channels.end(), {"indirect.R", "indirect.G", "indirect.B"});
   }
   const size_t n = img.channels.size(), pixels = size_t(f.width) * f.height;
   img.pixels.resize(pixels * n);
@@ -36,6 +40,13 @@ OutputImage make_output(const AoFrame& f, const Params& p) {
         *px++ = f.bent[i].z;
         *px++ = f.cone_cos[i];
       }
+      for (const auto* rgb :
+           {o == "irradiance" ? &f.irradiance : nullptr, o == "indirect" ? &f.indirect : nullptr})
+        if (rgb) {
+          *px++ = (*rgb)[i].x;
+          *px++ = (*rgb)[i].y;
+          *px++ = (*rgb)[i].z;
+        }
     }
   }
   return img;
