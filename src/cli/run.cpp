@@ -7,11 +7,14 @@
 #include <filesystem>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <set>
 
 #include "cli/commands.h"
 #include "hbil/ao_frame.h"
 #include "hbil/error.h"
+#include "io/display.h"
+#include "io/environment.h"
 #include "io/exr_frame.h"
 #include "io/exr_output.h"
 #include "io/sequence.h"
@@ -28,6 +31,8 @@ struct RunOptions {
   int threads = 0;
   bool quiet = false, verbose = false;
   ParamOptions params;
+  // Display images through OpenColorIO.
+  std::string display_out, display_layer, ocio_config, input_space, display, view;
 };
 
 // The frames to process and their input and output paths.
@@ -63,9 +68,66 @@ Job plan(const RunOptions& o) {
   return job;
 }
 
+// The config shipped with hbil: installed beside the binary, else in the source tree.
+std::string shipped_ocio_config() {
+  std::error_code ec;
+  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+  const fs::path installed = exe.parent_path().parent_path() / "share/hbil/ocio/hbil.ocio";
+  if (!ec && fs::exists(installed)) return installed.string();
+  return HBIL_OCIO_CONFIG;
+}
+
+// The pixels of a display layer: 1 (ao), 3 or 4 (composite) channels.
+std::vector<float> display_pixels(const AoFrame& f, const std::string& layer, int& channels) {
+  const size_t n = size_t(f.width) * f.height;
+  if (layer == "composite") {
+    channels = 4;
+    return f.composite;
+  }
+  if (layer == "ao" && f.ao_rgb.empty()) {
+    channels = 1;
+    return f.ao;
+  }
+  const std::vector<Vec3>& v = layer == "ao"           ? f.ao_rgb
+                               : layer == "irradiance" ? f.irradiance
+                               : layer == "indirect"   ? f.indirect
+                                                       : f.farfield;
+  channels = 3;
+  std::vector<float> out(n * 3);
+  for (size_t i = 0; i < n; ++i)
+    out[3 * i] = v[i].x, out[3 * i + 1] = v[i].y, out[3 * i + 2] = v[i].z;
+  return out;
+}
+
 void run(const RunOptions& o) {
   const Params p = o.params.load();
   const Job job = plan(o);
+  // Far field: the environment is projected to SH once for the whole run.
+  std::optional<SH9> environment;
+  if (!p.environment.empty()) environment = io::load_environment(p.environment);
+  // Display images: settings checked before any frame is computed.
+  std::optional<io::DisplayTransform> display;
+  std::optional<io::FramePattern> display_pattern;
+  std::string display_layer = o.display_layer;
+  if (!o.display_out.empty()) {
+    if (!io::is_display_image_path(o.display_out))
+      throw Error(Exit::usage,
+                  "--display-out " + o.display_out + ": use a .png, .jpg, .jpeg or .exr name");
+    if (display_layer.empty())
+      display_layer = p.wants("composite") ? "composite" : p.outputs.front();
+    if (display_layer == "bentcone" || !p.wants(display_layer))
+      throw Error(Exit::usage,
+                  "--display-layer " + display_layer +
+                      ": must be one of the computed colour layers (ao, irradiance, indirect, "
+                      "farfield, composite) named in outputs");
+    display.emplace(io::DisplaySettings{o.ocio_config, o.input_space, o.display, o.view},
+                    shipped_ocio_config());
+    display_pattern.emplace(o.display_out);
+    if (job.frames.size() > 1 && !display_pattern->is_sequence())
+      throw Error(Exit::usage,
+                  "--display-out " + o.display_out + ": a sequence needs a frame pattern");
+    if (!o.quiet) std::cerr << "hbil: display images: " << display->describe() << "\n";
+  }
   std::unique_ptr<tbb::global_control> threads;
   if (o.threads > 0)
     threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
@@ -111,11 +173,20 @@ void run(const RunOptions& o) {
       const auto t_read = Clock::now();
       const Camera cam = io::find_camera(in, g, p);
       const auto t_camera = Clock::now();
-      const AoFrame result = compute_ao_frame(g, cam, p);
+      const AoFrame result = compute_ao_frame(g, cam, p, environment ? &*environment : nullptr);
       const auto t_compute = Clock::now();
       const std::string out_path = job.out.path(frame);
       done.emplace_back(io::write_temporary(out_path, io::make_output(result, p), in.spec, p, cam),
                         out_path);
+      if (display) {
+        int channels = 0;
+        const std::vector<float> px = display_pixels(result, display_layer, channels);
+        const std::string path = display_pattern->path(frame);
+        done.emplace_back(io::write_display_temporary(
+                              path, px, channels, result.width, result.height, *display,
+                              "hbil " + display_layer + ", frame " + std::to_string(frame)),
+                          path);
+      }
       if (o.verbose) {
         auto ms = [](auto a, auto b) {
           return std::chrono::duration<double, std::milli>(b - a).count();
@@ -173,6 +244,22 @@ void add_run(CLI::App& app) {
   cmd->add_flag(
       "-v,--verbose", o->verbose,
       "also print the time each frame spends reading, finding the camera, computing and writing");
+  cmd->add_option(
+      "--display-out", o->display_out,
+      "also write a display image per frame (.png, .jpg, .exr; frame pattern) through OpenColorIO");
+  cmd->add_option(
+      "--display-layer", o->display_layer,
+      "layer shown in the display image: composite (default when computed), ao, irradiance, "
+      "indirect, farfield");
+  cmd->add_option("--display", o->display,
+                  "OCIO display (default: the config's default, sRGB in the shipped one)");
+  cmd->add_option("--view", o->view,
+                  "OCIO view (default: the display's default, Standard in the shipped one)");
+  cmd->add_option("--input-space", o->input_space,
+                  "OCIO colour space of the pixels (default: the scene_linear role)");
+  cmd->add_option("--ocio-config", o->ocio_config,
+                  "OCIO config file; default $OCIO, else the config shipped with hbil "
+                  "(presets/ocio/hbil.ocio)");
   o->params.add_to(*cmd);
   cmd->callback([o] { run(*o); });
 }

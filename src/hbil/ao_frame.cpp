@@ -3,7 +3,11 @@
 
 #include <tbb/parallel_for.h>
 
+#include <cmath>
+
+#include "hbil/error.h"
 #include "hbil/interleave.h"
+#include "hbil/multibounce.h"
 #include "hbil/spatial_filter.h"
 
 namespace hbil {
@@ -18,15 +22,18 @@ std::vector<Vec3> source_radiance(const GBuffer& g, const std::vector<Vec3>& irr
   return L;
 }
 
-AoFrame compute_ao_frame(const GBuffer& g, const Camera& cam, const Params& p) {
-  return compute_ao_frame(make_view_gbuffer(g, cam, p), g, cam, p);
+AoFrame compute_ao_frame(const GBuffer& g, const Camera& cam, const Params& p,
+                         const SH9* environment) {
+  return compute_ao_frame(make_view_gbuffer(g, cam, p), g, cam, p, environment);
 }
 
-AoFrame compute_ao_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& cam,
-                         const Params& p) {
+AoFrame compute_ao_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& cam, const Params& p,
+                         const SH9* environment) {
   const std::vector<Vec3>& world_normal = g.normal;
   const HorizonConfig c = make_horizon_config(p, cam);
-  const bool gather = p.wants("irradiance") || p.wants("indirect");
+  const bool gather = p.wants("irradiance") || p.wants("indirect") || p.wants("composite");
+  const bool far = p.wants("farfield") || (p.wants("composite") && environment);
+  if (far && !environment) throw Error(Exit::preset, "output farfield needs an environment");
   auto search = [&](const std::vector<Vec3>* radiance) {
     HorizonImage h = p.interleave ? horizon_interleaved(v, c, p.slices, radiance)
                                   : horizon_full(v, c, p.slices, radiance);
@@ -53,10 +60,36 @@ AoFrame compute_ao_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& c
     out.irradiance.assign(v.pixels(), Vec3{});
     out.indirect.assign(v.pixels(), Vec3{});
   }
+  const bool multibounce = p.ao_multibounce && p.wants("ao");
+  if (multibounce) out.ao_rgb.assign(v.pixels(), Vec3{1, 1, 1});
+  if (far) out.farfield.assign(v.pixels(), Vec3{});
+  const bool composite = p.wants("composite");
+  if (composite) out.composite.assign(v.pixels() * 4, 0.f);
   tbb::parallel_for(0, v.height, [&](int y) {
     for (int x = 0; x < v.width; ++x) {
       const size_t i = size_t(y) * v.width + x;
       if (!world_normal.empty()) out.bent[i] = world_normal[i];
+      if (composite) {
+        // composite = DiffCol × (DiffDir + E_near/π [+ E_far/π]) + Emit + Env + glossy +
+        // transmission. Every term is a pixel-filtered pass, so the sum is premultiplied.
+        Vec3 e = g.diffdir[i];
+        if (!v.is_background(i)) e += h.irradiance[i];
+        Vec3 rgb{g.diffcol[i].x * e.x, g.diffcol[i].y * e.y, g.diffcol[i].z * e.z};
+        for (const std::vector<Vec3>* add : {&g.emit, &g.env})
+          if (!add->empty()) rgb += (*add)[i];
+        auto lobe = [&](const std::vector<Vec3>& col, const std::vector<Vec3>& dir,
+                        const std::vector<Vec3>& ind) {
+          if (col.empty()) return;
+          Vec3 l = dir.empty() ? Vec3{} : dir[i];
+          if (!ind.empty()) l += ind[i];
+          rgb += Vec3{col[i].x * l.x, col[i].y * l.y, col[i].z * l.z};
+        };
+        lobe(g.glosscol, g.glossdir, g.glossind);
+        lobe(g.transcol, g.transdir, g.transind);
+        float* px = &out.composite[4 * i];
+        px[0] = rgb.x, px[1] = rgb.y, px[2] = rgb.z;
+        px[3] = g.alpha.empty() ? 1.f : g.alpha[i];
+      }
       if (v.is_background(i)) continue;
       if (gather) {
         const Vec3 e = h.irradiance[i], a = g.diffcol[i];
@@ -69,6 +102,17 @@ AoFrame compute_ao_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& c
       // Fully occluded: no bent direction; fall back to the (unit) normal.
       out.bent[i] =
           dot(b, b) > 0 ? b : Vec3(normalize_or_zero(cam.view_dir_to_world(Vec3d(v.normal[i]))));
+      if (multibounce) out.ao_rgb[i] = multibounce_ao(out.ao[i], g.diffcol[i]);
+      if (far) {
+        // §2.2.4: SH irradiance limited to the bent cone, t = cos α; stored as E/π.
+        out.farfield[i] = cone_irradiance(*environment, out.bent[i], out.cone_cos[i]) / float(M_PI);
+        if (composite) {
+          const Vec3 a = g.diffcol[i], f = out.farfield[i];
+          out.composite[4 * i] += a.x * f.x;
+          out.composite[4 * i + 1] += a.y * f.y;
+          out.composite[4 * i + 2] += a.z * f.z;
+        }
+      }
     }
   });
   return out;

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "hbil/camera.h"
+#include "hbil/farfield.h"
 #include "hbil/gbuffer.h"
 #include "hbil/params.h"
 
@@ -19,6 +20,9 @@ struct AoFrame {
   // With the outputs irradiance or indirect (empty otherwise):
   std::vector<Vec3> irradiance;  // E_near / π: the units of Blender's DiffInd
   std::vector<Vec3> indirect;    // DiffCol × E_near / π: comparable to DiffCol × DiffInd
+  std::vector<Vec3> ao_rgb;      // ao_multibounce: multi-bounce AO per channel
+  std::vector<Vec3> farfield;    // far-field irradiance / π in the bent cone (§2.2.4)
+  std::vector<float> composite;  // RGBA, premultiplied like Blender's passes
 };
 
 // The diffusely reflected radiance a pixel sends to its neighbours (HBIL eq. 16-17):
@@ -28,11 +32,13 @@ std::vector<Vec3> source_radiance(const GBuffer& g, const std::vector<Vec3>& irr
 
 // Background pixels get ao = 1, bent = the input normal as stored (zero for Blender's
 // background) and cone_cos = 0 (a full hemisphere).
-AoFrame compute_ao_frame(const GBuffer& g, const Camera& cam, const Params& p);
+// `environment` (SH of the far field, world space) is needed by the farfield output.
+AoFrame compute_ao_frame(const GBuffer& g, const Camera& cam, const Params& p,
+                         const SH9* environment = nullptr);
 
 // The same from an already prepared view-space G-buffer (used by tests and benchmarks).
 // `g` supplies the world normals and, for irradiance, the colour fields.
-AoFrame compute_ao_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& cam,
-                         const Params& p);
+AoFrame compute_ao_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& cam, const Params& p,
+                         const SH9* environment = nullptr);
 
 }  // namespace hbil

@@ -8,6 +8,22 @@
 
 namespace hbil {
 
+std::vector<Vec3>* GBuffer::rgb(const std::string& field) {
+  if (field == "normal") return &normal;
+  if (field == "position") return &position;
+  if (field == "diffcol") return &diffcol;
+  if (field == "diffdir") return &diffdir;
+  if (field == "emit") return &emit;
+  if (field == "env") return &env;
+  if (field == "glosscol") return &glosscol;
+  if (field == "glossdir") return &glossdir;
+  if (field == "glossind") return &glossind;
+  if (field == "transcol") return &transcol;
+  if (field == "transdir") return &transdir;
+  if (field == "transind") return &transind;
+  return nullptr;
+}
+
 ViewGBuffer make_view_gbuffer(const GBuffer& g, const Camera& cam, const Params& p) {
   ViewGBuffer v;
   v.width = g.width;

@@ -1,6 +1,7 @@
 // gbuffer.h: the G-buffer as read from a frame, and its view-space form for the kernels.
 #pragma once
 
+#include <string>
 #include <vector>
 
 #include "hbil/camera.h"
@@ -20,6 +21,11 @@ struct GBuffer {
   std::vector<Vec3> diffcol;   // diffuse albedo (Blender DiffCol)
   std::vector<Vec3> diffdir;   // direct diffuse irradiance / π (Blender DiffDir)
   std::vector<Vec3> emit;      // emitted radiance (Blender Emit)
+  // Passed through into the composite when present (Blender names: Env, GlossCol, ...).
+  std::vector<Vec3> env, glosscol, glossdir, glossind, transcol, transdir, transind;
+
+  // The RGB field of that G-buffer field name (diffcol, env, ...), or null.
+  std::vector<Vec3>* rgb(const std::string& field);
 
   size_t pixels() const { return size_t(width) * size_t(height); }
 };

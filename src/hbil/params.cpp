@@ -48,6 +48,9 @@ const std::vector<ParamInfo>& params_table() {
        "method bitmask: thickness added per world unit of the sample's depth"},
       {"bounces", &Params::bounces, 1, 16, "count",
        "in-frame bounces of indirect light: bounce k gathers the outgoing radiance of bounce k-1"},
+      {"ao_multibounce", &Params::ao_multibounce, 0, 1, "bool",
+       "write ao as ao.R/G/B with the multi-bounce approximation of the improved-AO notes "
+       "(eq. 12, per channel with DiffCol as albedo) instead of ao.Y; needs DiffCol"},
       {"background_depth", &Params::background_depth, 1e-6, 1e30, "world units",
        "depth at or beyond which a pixel is background (Blender writes 1e10)"},
   };
@@ -55,13 +58,15 @@ const std::vector<ParamInfo>& params_table() {
 }
 
 const std::vector<std::string>& gbuffer_fields() {
-  static const std::vector<std::string> f = {"depth",   "normal",  "position", "alpha",
-                                             "diffcol", "diffdir", "emit"};
+  static const std::vector<std::string> f = {
+      "depth", "normal",   "position", "alpha",    "diffcol",  "diffdir",  "emit",
+      "env",   "glosscol", "glossdir", "glossind", "transcol", "transdir", "transind"};
   return f;
 }
 
 const std::vector<std::string>& known_outputs() {
-  static const std::vector<std::string> o = {"ao", "bentcone", "irradiance", "indirect"};
+  static const std::vector<std::string> o = {"ao",       "bentcone", "irradiance",
+                                             "indirect", "farfield", "composite"};
   return o;
 }
 
@@ -71,6 +76,7 @@ json to_json(const Params& p) {
     std::visit([&](auto m) { j[info.key] = p.*m; }, info.member);
   }
   j["method"] = p.method;
+  j["environment"] = p.environment;
   j["view_layer"] = p.view_layer;
   j["passes"] = p.passes;
   j["outputs"] = p.outputs;
@@ -126,6 +132,10 @@ Params params_from_json(const json& j, const std::string& where, Params p) {
       if (!v.is_string())
         fail(where, "key 'method' must be \"horizon\" or \"bitmask\", got " + v.dump());
       p.method = v.get<std::string>();
+    } else if (key == "environment") {
+      if (!v.is_string())
+        fail(where, "key 'environment' must be a file name or \"rgb:r,g,b\", got " + v.dump());
+      p.environment = v.get<std::string>();
     } else if (key == "view_layer") {
       if (!v.is_string()) fail(where, "key 'view_layer' must be a string, got " + v.dump());
       p.view_layer = v.get<std::string>();
@@ -156,7 +166,7 @@ Params params_from_json(const json& j, const std::string& where, Params p) {
     } else {
       std::vector<std::string> keys;
       for (const auto& i : params_table()) keys.push_back(i.key);
-      keys.insert(keys.end(), {"method", "view_layer", "passes", "outputs"});
+      keys.insert(keys.end(), {"method", "environment", "view_layer", "passes", "outputs"});
       fail(where, "unknown key '" + key + "' (known: " + allowed_list(keys) + ")");
     }
   }
@@ -184,6 +194,9 @@ void validate(const Params& p, const std::string& where) {
   if (p.method != "horizon" && p.method != "bitmask")
     fail(where, "key 'method' = \"" + p.method + "\" is not one of \"horizon\", \"bitmask\"");
   if (p.outputs.empty()) fail(where, "key 'outputs' is empty: nothing to compute");
+  if (p.wants("farfield") && p.environment.empty())
+    fail(where,
+         "output 'farfield' needs key 'environment' (an equirectangular EXR or \"rgb:r,g,b\")");
   for (const auto& o : p.outputs) {
     const auto& k = known_outputs();
     if (std::find(k.begin(), k.end(), o) == k.end())

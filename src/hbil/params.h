@@ -31,6 +31,8 @@ struct Params {
   double thickness = 0.5;          // bitmask: occluder thickness behind each sample, world units
   double thickness_growth = 0.0;   // bitmask: extra thickness per world unit of sample depth
   int bounces = 1;                 // in-frame bounces of indirect light (1 = one bounce)
+  std::string environment;         // far field: "" (off), equirect EXR path, or "rgb:r,g,b"
+  bool ao_multibounce = false;     // ao as RGB with the multi-bounce fit (improved-AO eq. 12)
 
   // --- Input ---
   double background_depth = 1e9;  // depth >= this (Blender: 1e10) is background

@@ -14,11 +14,12 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 
 const std::vector<std::string>& field_components(const std::string& field) {
-  static const std::map<std::string, std::vector<std::string>> c = {
-      {"depth", {"Z"}},         {"normal", {"X", "Y", "Z"}},  {"position", {"X", "Y", "Z"}},
-      {"alpha", {"A"}},         {"diffcol", {"R", "G", "B"}}, {"diffdir", {"R", "G", "B"}},
-      {"emit", {"R", "G", "B"}}};
-  return c.at(field);
+  static const std::vector<std::string> depth = {"Z"}, xyz = {"X", "Y", "Z"}, alpha = {"A"},
+                                        rgb = {"R", "G", "B"};
+  if (field == "depth") return depth;
+  if (field == "normal" || field == "position") return xyz;
+  if (field == "alpha") return alpha;
+  return rgb;  // colour passes: diffcol, diffdir, emit, env, gloss*, trans*
 }
 
 std::string InputFrame::where() const {
@@ -127,17 +128,30 @@ std::vector<std::string> fields_needed(const InputFrame& f, const Params& p) {
                                           "; map them with passes.depth / passes.position)");
     need.push_back("normal");
   }
-  if (p.wants("irradiance") || p.wants("indirect")) {
+  const bool needs_albedo = p.ao_multibounce && p.wants("ao");
+  if (needs_albedo && !(p.wants("irradiance") || p.wants("indirect") || p.wants("composite"))) {
+    if (!f.has("diffcol"))
+      throw Error(Exit::missing_pass, f.where() + ": missing pass: diffcol (looked for channels " +
+                                          join(f.wanted.at("diffcol")) +
+                                          "; needed by ao_multibounce)");
+    need.push_back("diffcol");
+  }
+  if (p.wants("irradiance") || p.wants("indirect") || p.wants("composite")) {
     // Source radiance DiffCol × DiffDir + Emit (HBIL eq. 16-17); Emit is optional.
     for (const char* field : {"diffcol", "diffdir"})
       if (!f.has(field))
         throw Error(Exit::missing_pass,
                     f.where() + ": missing pass: " + field + " (looked for channels " +
                         join(f.wanted.at(field)) +
-                        "; needed by irradiance and indirect; map it with passes." + field + ")");
+                        "; needed by irradiance, indirect and composite; map it with passes." +
+                        field + ")");
     need.insert(need.end(), {"diffcol", "diffdir"});
     if (f.has("emit")) need.push_back("emit");
   }
+  if (p.wants("composite"))  // passed through when present
+    for (const char* field :
+         {"env", "glosscol", "glossdir", "glossind", "transcol", "transdir", "transind"})
+      if (f.has(field)) need.push_back(field);
   if (f.has("alpha")) need.push_back("alpha");
   return need;
 }
@@ -208,11 +222,7 @@ GBuffer read_fields(const InputFrame& f, const std::vector<std::string>& fields,
     } else if (field == "alpha") {
       g.alpha = std::move(v);
     } else {
-      std::vector<Vec3>& dst = field == "normal"     ? g.normal
-                               : field == "position" ? g.position
-                               : field == "diffcol"  ? g.diffcol
-                               : field == "diffdir"  ? g.diffdir
-                                                     : g.emit;
+      std::vector<Vec3>& dst = *g.rgb(field);
       dst.resize(g.pixels());
       for (size_t i = 0; i < g.pixels(); ++i) {
         for (int k = 0; k < 3; ++k)

@@ -19,7 +19,14 @@ OutputImage make_output(const AoFrame& f, const Params& p) {
   img.width = f.width;
   img.height = f.height;
   for (const auto& o : p.outputs) {
-    if (o == "ao") img.channels.push_back("ao.Y");
+    if (o == "ao" && f.ao_rgb.empty()) img.channels.push_back("ao.Y");
+    if (o == "ao" && !f.ao_rgb.empty())
+      img.channels.insert(img.channels.end(), {"ao.R", "ao.G", "ao.B"});
+    if (o == "farfield")
+      img.channels.insert(img.channels.end(), {"farfield.R", "farfield.G", "farfield.B"});
+    if (o == "composite")
+      img.channels.insert(img.channels.end(),
+                          {"composite.R", "composite.G", "composite.B", "composite.A"});
     if (o == "bentcone")
       img.channels.insert(img.channels.end(),
                           {"bentcone.X", "bentcone.Y", "bentcone.Z", "bentcone.W"});
@@ -33,7 +40,11 @@ OutputImage make_output(const AoFrame& f, const Params& p) {
   for (size_t i = 0; i < pixels; ++i) {
     float* px = &img.pixels[i * n];
     for (const auto& o : p.outputs) {
-      if (o == "ao") *px++ = f.ao[i];
+      if (o == "ao" && f.ao_rgb.empty()) *px++ = f.ao[i];
+      if (o == "ao" && !f.ao_rgb.empty())
+        *px++ = f.ao_rgb[i].x, *px++ = f.ao_rgb[i].y, *px++ = f.ao_rgb[i].z;
+      if (o == "composite")
+        for (int k = 0; k < 4; ++k) *px++ = f.composite[4 * i + k];
       if (o == "bentcone") {
         *px++ = f.bent[i].x;
         *px++ = f.bent[i].y;
@@ -41,7 +52,8 @@ OutputImage make_output(const AoFrame& f, const Params& p) {
         *px++ = f.cone_cos[i];
       }
       for (const auto* rgb :
-           {o == "irradiance" ? &f.irradiance : nullptr, o == "indirect" ? &f.indirect : nullptr})
+           {o == "irradiance" ? &f.irradiance : nullptr, o == "indirect" ? &f.indirect : nullptr,
+            o == "farfield" ? &f.farfield : nullptr})
         if (rgb) {
           *px++ = (*rgb)[i].x;
           *px++ = (*rgb)[i].y;
