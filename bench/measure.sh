@@ -30,6 +30,33 @@ PY
   done
 done
 
+# Indirect light (work in progress, issue 3): AO, indirect (1 bounce) against Cycles
+# DiffCol x DiffInd rendered with 1 diffuse bounce, and composite against Combined (main
+# render, 8 bounces), for both occlusion methods at the default parameters.
+echo
+echo "| scene | method | AO PSNR | indirect vs 1-bounce DiffCol*DiffInd: RMSE / mean / PSNR | composite vs Combined: RMSE / mean / PSNR | s/frame |"
+echo "|---|---|---|---|---|---|"
+for scene in courtyard room_poles; do
+  for method in horizon bitmask; do
+    out="$tmp/gi-$scene-$method"
+    log=$("$hbil" run "samples/$scene/frame_####.exr" -o "$out/f_####.exr" --set method=$method \
+      --set 'outputs=["ao","irradiance","indirect","composite"]' 2>&1 | tail -n 1)
+    spf=$(sed -n 's/.* \([0-9.]*\) s per frame.*/\1/p' <<<"$log")
+    "$hbil" compare "$out/f_####.exr" "samples/$scene/frame_####.exr" --layer ao --ref-layer AO --json >"$tmp/a.json"
+    "$hbil" compare "$out/f_####.exr" "samples/$scene/bounce1/frame_####.exr" --layer indirect \
+      --ref-layer 'DiffCol*DiffInd' --json >"$tmp/i.json"
+    "$hbil" compare "$out/f_####.exr" "samples/$scene/frame_####.exr" --layer composite \
+      --ref-layer Combined --json >"$tmp/c.json"
+    python3 - "$scene" "$method" "$spf" "$tmp/a.json" "$tmp/i.json" "$tmp/c.json" <<'PY'
+import json, sys
+scene, method, spf, a, i, c = sys.argv[1:]
+a, i, c = (json.load(open(f))["overall"] for f in (a, i, c))
+f = lambda o: f"{o['rmse']:.4f} / {o['mean_error']:+.4f} / {o['psnr']:.2f}"
+print(f"| {scene} | {method} | {a['psnr']:.2f} | {f(i)} | {f(c)} | {spf} |")
+PY
+  done
+done
+
 # 1920x1080: frames 1-4 of room_poles upscaled, sidecars adjusted to the new resolution.
 mkdir -p "$tmp/hd"
 for f in 1 2 3 4; do
