@@ -261,18 +261,7 @@ std::string write_display_temporary(const std::string& final_path, const std::ve
   }
 
   std::error_code ec;
-  if (final_p.has_parent_path()) {
-    fs::create_directories(final_p.parent_path(), ec);
-    if (ec)
-      throw Error(Exit::output, final_path + ": cannot create folder " +
-                                    final_p.parent_path().string() + ": " + ec.message());
-  }
-  static std::atomic<int> counter{0};
-  // The final extension is kept: OIIO picks the format from it.
-  const fs::path tmp =
-      final_p.parent_path() /
-      ("." + final_p.stem().string() + ".hbil-tmp-display-" + std::to_string(getpid()) + "-" +
-       std::to_string(counter++) + final_p.extension().string());
+  const fs::path tmp = prepare_temporary(final_path, "display-");
   auto out = OIIO::ImageOutput::create(tmp.string());
   if (!out)
     throw Error(Exit::output, final_path + ": cannot create an image writer: " + OIIO::geterror());

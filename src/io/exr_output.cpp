@@ -81,9 +81,7 @@ std::string camera_json(const Camera& c) {
   return j.dump();
 }
 
-std::string write_temporary(const std::string& final_path, const OutputImage& img,
-                            const OIIO::ImageSpec& input_header, const Params& p,
-                            const Camera& cam) {
+std::string prepare_temporary(const std::string& final_path, const std::string& tag) {
   const fs::path final_p(final_path);
   std::error_code ec;
   if (final_p.has_parent_path()) {
@@ -93,9 +91,17 @@ std::string write_temporary(const std::string& final_path, const OutputImage& im
                                     final_p.parent_path().string() + ": " + ec.message());
   }
   static std::atomic<int> counter{0};
-  const fs::path tmp =
-      final_p.parent_path() / ("." + final_p.stem().string() + ".hbil-tmp-" +
-                               std::to_string(getpid()) + "-" + std::to_string(counter++) + ".exr");
+  return (final_p.parent_path() /
+          ("." + final_p.stem().string() + ".hbil-tmp-" + tag + std::to_string(getpid()) + "-" +
+           std::to_string(counter++) + final_p.extension().string()))
+      .string();
+}
+
+std::string write_temporary(const std::string& final_path, const OutputImage& img,
+                            const OIIO::ImageSpec& input_header, const Params& p,
+                            const Camera& cam) {
+  const fs::path tmp = prepare_temporary(final_path);
+  std::error_code ec;
   OIIO::ImageSpec spec(img.width, img.height, int(img.channels.size()), OIIO::TypeDesc::FLOAT);
   spec.channelnames = img.channels;
   spec.alpha_channel = -1;

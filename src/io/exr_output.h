@@ -38,6 +38,11 @@ std::string write_temporary(const std::string& final_path, const OutputImage& im
                             const OIIO::ImageSpec& input_header, const Params& p,
                             const Camera& cam);
 
+// Creates final_path's folder and returns a hidden, unique temporary name beside it,
+// ".<stem>.hbil-tmp-<tag><pid>-<n><extension>" (the extension kept so OIIO picks the same
+// format). Throws Error(Exit::output) when the folder cannot be created.
+std::string prepare_temporary(const std::string& final_path, const std::string& tag = "");
+
 // Renames a temporary into place (replacing an older file). Throws Error(Exit::output).
 void commit(const std::string& temporary, const std::string& final_path);
 
