@@ -49,7 +49,7 @@ struct HorizonConfig {
   float step_power = 2;  // sample spacing exponent
   float fx = 1, fy = 1;  // full-resolution focal lengths, pixels
   bool bitmask = false;  // visibility bitmask (Therrien et al. 2023) instead of two horizons
-  float thickness = 0.5f, thickness_growth = 0;  // bitmask occluder thickness: t + growth * z
+  float thickness = 0.4f, thickness_growth = 0;  // bitmask occluder thickness: t + growth * z
 };
 HorizonConfig make_horizon_config(const Params& p, const Camera& cam);
 

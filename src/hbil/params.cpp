@@ -12,9 +12,11 @@ namespace hbil {
 using nlohmann::json;
 
 std::map<std::string, json> Params::default_passes() {
-  return {{"depth", "Depth"},      {"normal", "Normal"},   {"position", "Position"},
-          {"alpha", "Combined.A"}, {"diffcol", "DiffCol"}, {"diffdir", "DiffDir"},
-          {"emit", "Emit"}};
+  return {{"depth", "Depth"},       {"normal", "Normal"},     {"position", "Position"},
+          {"alpha", "Combined.A"},  {"diffcol", "DiffCol"},   {"diffdir", "DiffDir"},
+          {"emit", "Emit"},         {"env", "Env"},           {"glosscol", "GlossCol"},
+          {"glossdir", "GlossDir"}, {"glossind", "GlossInd"}, {"transcol", "TransCol"},
+          {"transdir", "TransDir"}, {"transind", "TransInd"}};
 }
 
 bool Params::wants(const std::string& output) const {
