@@ -99,6 +99,45 @@ TEST(NearFieldIrradiance, BackFacingNeighbourOccludesButSendsNoLight) {
   EXPECT_GT(checked, 100);
 }
 
+// gather_radius: with a small AO radius the gather still reaches all of face B through the
+// gather-only samples, and the ao layer is bit-identical to a run that gathers nothing.
+void check_gather_radius(const std::string& method) {
+  const Vec3 L{1, 1, 1};
+  const Groove s = lit_groove(90, L);
+  Params p = gather_params(method);
+  p.radius = 0.1;
+  p.steps = 16;
+  p.gather_radius = 1e3;
+  p.gather_steps = 160;
+  Params ao_only = p;
+  ao_only.outputs = {"ao"};
+  const AoFrame f = compute_ao_frame(s.g, s.cam, p), a = compute_ao_frame(s.g, s.cam, ao_only);
+  int checked = 0, occluded_less = 0;
+  for (size_t i = 0; i < s.g.pixels(); ++i) {
+    if (s.g.depth[i] > 1e9f) continue;
+    ASSERT_EQ(f.ao[i], a.ao[i]) << method << " pixel " << i;
+    if (s.g.normal[i].z < 0.99f) continue;
+    const int x = int(i % s.g.width), y = int(i / s.g.width);
+    const Vec3d hit = s.cam.view_to_world(s.cam.unproject(x + 0.5, y + 0.5, s.g.depth[i]));
+    if (hit.y < 0.2 || hit.y > 0.6 || std::fabs(hit.x) > 0.3) continue;
+    const double psi =
+        std::atan2(s.length_b * std::sin(s.gamma), hit.y - s.length_b * std::cos(s.gamma));
+    const double occluded = (1 - std::cos(psi)) / 2;
+    ++checked;
+    EXPECT_NEAR(f.irradiance[i].x, occluded, 0.04) << method << " d=" << hit.y;
+    // Face B is farther than the AO radius from these points: ao sees (almost) none of it.
+    if (1 - f.ao[i] < 0.5 * occluded) ++occluded_less;
+  }
+  EXPECT_GT(checked, 50);
+  EXPECT_EQ(occluded_less, checked);
+}
+TEST(NearFieldIrradiance, HorizonGatherRadiusBeyondAoRadius) {
+  check_gather_radius("horizon");
+}
+TEST(NearFieldIrradiance, BitmaskGatherRadiusBeyondAoRadius) {
+  check_gather_radius("bitmask");
+}
+
 TEST(VisibilityBitmask, InfiniteThicknessReproducesHorizon) {
   const Groove s = lit_groove(60, {1, 1, 1});
   Params h = gather_params("horizon"), b = gather_params("bitmask");

@@ -256,7 +256,7 @@ TEST(Params, ShippedPresetsLoad) {
   std::error_code ec;
   for (const auto& e : fs::directory_iterator(dir, ec))
     if (e.path().extension() == ".json") files.push_back(e.path());
-  if (files.empty()) GTEST_SKIP() << "no presets/*.json yet";
+  ASSERT_GE(files.size(), 4u) << "default, fast, quality, reference";
   for (const auto& f : files) {
     SCOPED_TRACE(f.string());
     json j;
@@ -264,6 +264,34 @@ TEST(Params, ShippedPresetsLoad) {
     Params p;
     ASSERT_NO_THROW(p = params_from_json(j, f.string()));
     EXPECT_EQ(to_json(params_from_json(to_json(p), "round trip")), to_json(p));
+  }
+}
+
+// presets/default.json is the full dump of the built-in defaults (`hbil preset --dump`): a
+// default changed in params.h without the file (or the other way round) fails here.
+TEST(Params, DefaultPresetIsTheFullDumpOfTheDefaults) {
+  const json j = json::parse(test::read_text(fs::path(HBIL_SOURCE_DIR) / "presets/default.json"));
+  EXPECT_EQ(j, to_json(Params{}));
+}
+
+// The man page documents every preset key with its default (".B key \fR= default").
+TEST(Params, ManPageDocumentsEveryKeyWithItsDefault) {
+  const std::string man = test::read_text(fs::path(HBIL_SOURCE_DIR) / "man/hbil.1");
+  const json defaults = to_json(Params{});
+  for (auto it = defaults.begin(); it != defaults.end(); ++it) {
+    const std::string entry = ".B " + it.key() + " \\fR= ";
+    const size_t at = man.find(entry);
+    ASSERT_NE(at, std::string::npos) << "man/hbil.1 lacks " << entry;
+    // The stated default parses to the built-in one (numbers: up to the unit or range).
+    std::string text = man.substr(at + entry.size(), man.find('\n', at) - at - entry.size());
+    if (it.value().is_number() || it.value().is_boolean()) text = text.substr(0, text.find(' '));
+    for (size_t q; (q = text.find("\\-")) != std::string::npos;) text.replace(q, 2, "-");
+    const json stated = json::parse(text, nullptr, false);
+    ASSERT_FALSE(stated.is_discarded()) << it.key() << ": " << text;
+    if (it.value().is_number())
+      EXPECT_DOUBLE_EQ(stated.get<double>(), it.value().get<double>()) << it.key();
+    else
+      EXPECT_EQ(stated, it.value()) << it.key();
   }
 }
 

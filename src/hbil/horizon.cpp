@@ -29,13 +29,17 @@ HorizonConfig make_horizon_config(const Params& p, const Camera& cam) {
   c.bitmask = p.method == "bitmask";
   c.thickness = float(p.thickness);
   c.thickness_growth = float(p.thickness_growth);
+  c.gather_radius = float(std::max(p.radius, p.gather_radius));
+  c.gather_steps = c.gather_radius > c.radius ? p.gather_steps : 0;
   return c;
 }
 
 std::vector<float> step_fractions(const HorizonConfig& c, float jitter) {
-  std::vector<float> f(c.steps);
+  std::vector<float> f(c.steps + c.gather_steps);
   for (int k = 0; k < c.steps; ++k)
     f[k] = std::pow((float(k) + jitter) / float(c.steps), c.step_power);
+  for (int k = 0; k < c.gather_steps; ++k)
+    f[c.steps + k] = (float(k) + jitter) / float(c.gather_steps);
   return f;
 }
 
@@ -87,10 +91,17 @@ PixelSums march_pixel(const SampleView& view, int i, int j, const Vec3& P, const
   // Screen-space search radius in texels: the world radius at this depth (HBAO, XeGTAO).
   const float focal = 0.5f * (c.fx + c.fy);
   // Never beyond the image: a larger radius would only step off screen.
-  const float r_tex = std::min(c.radius * focal / (P.z * float(view.stride)),
-                               std::hypot(float(view.width), float(view.height)));
+  const float diagonal = std::hypot(float(view.width), float(view.height));
+  const float r_tex = std::min(c.radius * focal / (P.z * float(view.stride)), diagonal);
   const float r2 = c.radius * c.radius;
   const bool gather = view.radiance != nullptr;
+  // The gather may reach beyond the AO radius: gather_steps more samples per side between
+  // the two radii, which only the gather sees (AO is the same with or without them).
+  const bool far = gather && c.gather_steps > 0;
+  const float rg_tex =
+      far ? std::min(c.gather_radius * focal / (P.z * float(view.stride)), diagonal) : r_tex;
+  const float rg2 = far ? c.gather_radius * c.gather_radius : r2;
+  const int n_steps = c.steps + (far ? c.gather_steps : 0);
   constexpr int kSectors = 32;
   constexpr float kSectorWidth = kPi / kSectors;
   // Orthonormal basis of the plane orthogonal to ω_o; slice s has D = cos φ e1 + sin φ e2.
@@ -109,11 +120,13 @@ PixelSums march_pixel(const SampleView& view, int i, int j, const Vec3& P, const
     const float gamma = std::atan2(nx, ny);       // angle of n' from ω_o
     auto G = [&](float t) { return antiderivative(t, std::sin(t), std::cos(t), nx, ny); };
 
-    // Horizon method: the current horizons, starting at the tangent plane (§2.1).
+    // Horizon method: the current horizons, starting at the tangent plane (§2.1); those of
+    // the gather (g) see the samples up to the gather radius.
     float theta1 = std::min(gamma + 0.5f * kPi, kPi), theta0 = std::max(gamma - 0.5f * kPi, -kPi);
+    float theta1_g = theta1, theta0_g = theta0;
     // Bitmask method: 32 sectors over [γ − π/2, γ + π/2]; sector k's cosine-weighted
     // integral is W[k] = G(b_k) − G(a_k), so AO keeps the definition of eq. 9.
-    std::uint32_t occluded = 0;
+    std::uint32_t occluded = 0, occluded_g = 0;
     Antiderivative bound[kSectors + 1];
     const float sector0 = gamma - 0.5f * kPi;
     if (c.bitmask) {
@@ -129,68 +142,77 @@ PixelSums march_pixel(const SampleView& view, int i, int j, const Vec3& P, const
     }
     Vec3 irradiance;
 
-    if (r_tex >= 1.f) {
-      for (int side = 0; side < 2; ++side) {
-        const float sx = side == 0 ? dx : -dx, sy = side == 0 ? dy : -dy;
-        const float sign = side == 0 ? 1.f : -1.f;  // θ > 0 on the +D side
-        for (int k = 0; k < c.steps; ++k) {
-          const float o = 1.f + (r_tex - 1.f) * fraction[k];
-          const int oi = int(std::floor(sx * o + 0.5f)), oj = int(std::floor(sy * o + 0.5f));
-          if (oi == 0 && oj == 0) continue;
-          const int si = i + oi, sj = j + oj;
-          if (si < 0 || sj < 0 || si >= view.width || sj >= view.height) break;  // screen edge
-          const std::ptrdiff_t k_s = view.index(si, sj);
-          Vec3 S = view.position[k_s];
-          // Move S along its tangent plane onto the ray through the exact point of the line
-          // (see horizon.h): that ray lies in the slice plane.
-          const Vec3 ray = ray_P + dv * (sign * o) * float(view.stride);
-          const Vec3& n_s = view.normal[k_s];
-          const float denom = dot(ray, n_s);
-          if (std::fabs(denom) > kGrazing * length(ray)) S = ray * (dot(S, n_s) / denom);
-          const Vec3 d3 = S - P;  // background has z = 3e38, n = 0: |d3| > radius
-          const float dist2 = dot(d3, d3);
-          if (!(dist2 < r2) || dist2 <= 0.f) continue;
-          const float dist = std::sqrt(dist2);
-          const float theta_f = sign * std::acos(std::clamp(dot(d3, wo) / dist, -1.f, 1.f));
-          // Light the sample sends towards P (eq. 18: L_d(x') over the band it covers).
-          auto radiance = [&] {
-            return gather ? view.radiance[k_s] * facing_weight(n_s, d3 / dist) : Vec3{};
-          };
-          if (!c.bitmask) {
-            // A rise of the horizon occludes, and is lit by, the band it sweeps (eq. 18).
-            float lo, hi;
+    for (int side = 0; side < 2; ++side) {
+      const float sx = side == 0 ? dx : -dx, sy = side == 0 ? dy : -dy;
+      const float sign = side == 0 ? 1.f : -1.f;  // θ > 0 on the +D side
+      for (int k = 0; k < n_steps; ++k) {
+        const bool near = k < c.steps;
+        if (near && r_tex < 1.f) continue;  // the AO radius is under a texel
+        const float o = near ? 1.f + (r_tex - 1.f) * fraction[k]
+                             : std::max(r_tex, 1.f) + (rg_tex - r_tex) * fraction[k];
+        const int oi = int(std::floor(sx * o + 0.5f)), oj = int(std::floor(sy * o + 0.5f));
+        if (oi == 0 && oj == 0) continue;
+        const int si = i + oi, sj = j + oj;
+        if (si < 0 || sj < 0 || si >= view.width || sj >= view.height) break;  // screen edge
+        const std::ptrdiff_t k_s = view.index(si, sj);
+        Vec3 S = view.position[k_s];
+        // Move S along its tangent plane onto the ray through the exact point of the line
+        // (see horizon.h): that ray lies in the slice plane.
+        const Vec3 ray = ray_P + dv * (sign * o) * float(view.stride);
+        const Vec3& n_s = view.normal[k_s];
+        const float denom = dot(ray, n_s);
+        if (std::fabs(denom) > kGrazing * length(ray)) S = ray * (dot(S, n_s) / denom);
+        const Vec3 d3 = S - P;  // background has z = 3e38, n = 0: |d3| > radius
+        const float dist2 = dot(d3, d3);
+        if (!(dist2 < rg2) || dist2 <= 0.f) continue;
+        const bool in_ao = near && dist2 < r2;
+        const float dist = std::sqrt(dist2);
+        const float theta_f = sign * std::acos(std::clamp(dot(d3, wo) / dist, -1.f, 1.f));
+        // Light the sample sends towards P (eq. 18: L_d(x') over the band it covers).
+        auto radiance = [&] {
+          return view.radiance[k_s] * facing_weight(n_s, d3 / dist);
+        };
+        if (!c.bitmask) {
+          // A rise of the horizon occludes, and is lit by, the band it sweeps (eq. 18).
+          auto rise = [&](float& t0, float& t1, float& lo, float& hi) {
             if (side == 0) {
-              if (!(theta_f < theta1)) continue;
-              lo = theta_f, hi = theta1, theta1 = theta_f;
+              if (!(theta_f < t1)) return false;
+              lo = theta_f, hi = t1, t1 = theta_f;
             } else {
-              if (!(theta_f > theta0)) continue;
-              lo = theta0, hi = theta_f, theta0 = theta_f;
+              if (!(theta_f > t0)) return false;
+              lo = t0, hi = theta_f, t0 = theta_f;
             }
-            if (gather) irradiance += radiance() * (G(hi).ao - G(lo).ao);
-          } else {
-            // Therrien et al. 2023, Algorithm 1: the sample is an occluder of thickness t
-            // along its view ray; it covers [θf, θb] and lights the sectors it newly covers.
-            const float t = c.thickness + c.thickness_growth * S.z;
-            const Vec3 back = S + S * (t / length(S)) - P;
-            const float theta_b =
-                sign * std::acos(std::clamp(dot(back, wo) / length(back), -1.f, 1.f));
-            const float lo = (std::min(theta_f, theta_b) - sector0) / kSectorWidth;
-            const float hi = (std::max(theta_f, theta_b) - sector0) / kSectorWidth;
-            // "Round" criterion: a sector counts when at least half covered.
-            const int a = std::clamp(int(std::floor(lo + 0.5f)), 0, kSectors);
-            const int b = std::clamp(int(std::floor(hi + 0.5f)), 0, kSectors);
-            if (b <= a) continue;
-            const std::uint32_t mask = (b - a == 32 ? ~0u : ((1u << (b - a)) - 1u)) << a;
-            std::uint32_t fresh = mask & ~occluded;
-            occluded |= mask;
-            if (gather && fresh) {
-              float w = 0.f;
-              for (; fresh; fresh &= fresh - 1) {
-                const int q = std::countr_zero(fresh);
-                w += bound[q + 1].ao - bound[q].ao;
-              }
-              irradiance += radiance() * w;
+            return true;
+          };
+          float lo, hi;
+          if (in_ao) rise(theta0, theta1, lo, hi);
+          if (gather && rise(theta0_g, theta1_g, lo, hi))
+            irradiance += radiance() * (G(hi).ao - G(lo).ao);
+        } else {
+          // Therrien et al. 2023, Algorithm 1: the sample is an occluder of thickness t
+          // along its view ray; it covers [θf, θb] and lights the sectors it newly covers.
+          const float t = c.thickness + c.thickness_growth * S.z;
+          const Vec3 back = S + S * (t / length(S)) - P;
+          const float theta_b =
+              sign * std::acos(std::clamp(dot(back, wo) / length(back), -1.f, 1.f));
+          const float lo = (std::min(theta_f, theta_b) - sector0) / kSectorWidth;
+          const float hi = (std::max(theta_f, theta_b) - sector0) / kSectorWidth;
+          // "Round" criterion: a sector counts when at least half covered.
+          const int a = std::clamp(int(std::floor(lo + 0.5f)), 0, kSectors);
+          const int b = std::clamp(int(std::floor(hi + 0.5f)), 0, kSectors);
+          if (b <= a) continue;
+          const std::uint32_t mask = (b - a == 32 ? ~0u : ((1u << (b - a)) - 1u)) << a;
+          if (in_ao) occluded |= mask;
+          if (!gather) continue;
+          std::uint32_t fresh = mask & ~occluded_g;
+          occluded_g |= mask;
+          if (fresh) {
+            float w = 0.f;
+            for (; fresh; fresh &= fresh - 1) {
+              const int q = std::countr_zero(fresh);
+              w += bound[q + 1].ao - bound[q].ao;
             }
+            irradiance += radiance() * w;
           }
         }
       }

@@ -50,6 +50,8 @@ struct HorizonConfig {
   float fx = 1, fy = 1;  // full-resolution focal lengths, pixels
   bool bitmask = false;  // visibility bitmask (Therrien et al. 2023) instead of two horizons
   float thickness = 0.4f, thickness_growth = 0;  // bitmask occluder thickness: t + growth * z
+  float gather_radius = 1;  // world units, >= radius: how far the irradiance gather reaches
+  int gather_steps = 0;     // samples per side between radius and gather_radius (gather only)
 };
 HorizonConfig make_horizon_config(const Params& p, const Camera& cam);
 
@@ -84,8 +86,10 @@ struct PixelSums {
   Vec3 irradiance;  // Σ over slices of Σ_bands L_d(x') ΔI (eq. 18): mean = E_near / π
 };
 
-// Sample positions along a slice as fractions of the search radius: ((k + jitter)/steps)^power
-// for k < steps. The same for every pixel of a sub-buffer, so it is made once.
+// Sample positions along a slice: ((k + jitter)/steps)^power for k < steps, as fractions of
+// the AO radius, then (k + jitter)/gather_steps for the gather-only samples, as fractions of
+// the way from the AO radius to the gather radius. The same for every pixel of a sub-buffer,
+// so it is made once.
 std::vector<float> step_fractions(const HorizonConfig& c, float jitter);
 
 // Marches the slices at rotations phi[0..n) about ω_o (radians; φ = 0 is the slice holding

@@ -48,6 +48,11 @@ const std::vector<ParamInfo>& params_table() {
        "horizon is the limit of infinite thickness)"},
       {"thickness_growth", &Params::thickness_growth, 0, 1e3, "per world unit",
        "method bitmask: thickness added per world unit of the sample's depth"},
+      {"gather_radius", &Params::gather_radius, 0, 1e6, "world units",
+       "how far the irradiance gather reaches; occluders and emitters between radius and "
+       "gather_radius light and shadow irradiance but not ao (values <= radius: radius)"},
+      {"gather_steps", &Params::gather_steps, 0, 256, "per side",
+       "samples per side of a slice between radius and gather_radius, seen only by the gather"},
       {"bounces", &Params::bounces, 1, 16, "count",
        "in-frame bounces of indirect light: bounce k gathers the outgoing radiance of bounce k-1"},
       {"ao_multibounce", &Params::ao_multibounce, 0, 1, "bool",
