@@ -40,8 +40,14 @@ constexpr int kSampleW = 256, kSampleH = 144;
 // units). The solve reprojects within 0.001 px on this sample; measured RMS 2e-6.
 constexpr double kSolvedCameraAoRmse = 1e-3;
 
-const std::vector<std::string> kOutputChannels = {"ao.Y", "bentcone.X", "bentcone.Y", "bentcone.Z",
-                                                  "bentcone.W"};
+// The default outputs ("auto") on a sample that has every pass: EXR channels in the order
+// written (alphabetical by layer after ao and bentcone, as OpenEXR sorts them).
+const std::vector<std::string> kOutputChannels = {
+    "ao.Y",        "bentcone.X",  "bentcone.Y",   "bentcone.Z",   "bentcone.W",
+    "composite.R", "composite.G", "composite.B",  "composite.A",  "indirect.R",
+    "indirect.G",  "indirect.B",  "irradiance.R", "irradiance.G", "irradiance.B"};
+const std::vector<std::string> kAoChannels = {"ao.Y", "bentcone.X", "bentcone.Y", "bentcone.Z",
+                                              "bentcone.W"};
 
 std::string sample(int frame, const std::string& ext = ".exr") {
   char name[32];
@@ -108,7 +114,19 @@ TEST_F(Cli, RunWritesLayersAndMetadata) {
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_TRUE(contains(r.err, "frame 1 (1/2)")) << r.err;
   EXPECT_TRUE(contains(r.err, "camera: sidecar frame_0002.camera.json")) << r.err;
-  EXPECT_EQ(snapshot(path("out")).size(), 2u) << "exactly out_0001.exr and out_0002.exr";
+  EXPECT_TRUE(contains(r.err, "hbil: outputs: ao, bentcone, irradiance, indirect, composite"))
+      << r.err;
+  EXPECT_TRUE(contains(r.err, "display images " + path("out/out_####.png") + " (composite)"))
+      << r.err;
+  const auto files = snapshot(path("out"));
+  EXPECT_EQ(files.size(), 4u) << "exactly out_000{1,2}.exr and their sRGB PNGs";
+  for (const char* png : {"out_0001.png", "out_0002.png"}) {
+    ASSERT_TRUE(files.count(png)) << png;
+    const Pixels img = test::read_pixels(path(std::string("out/") + png));
+    EXPECT_EQ(img.spec.width, kSampleW);
+    EXPECT_EQ(img.spec.nchannels, 4) << "RGBA: the composite's alpha";
+    EXPECT_TRUE(contains(img.spec.get_string_attribute("ImageDescription"), "composite"));
+  }
   EXPECT_TRUE(test::files_containing(dir.path(), ".hbil-tmp").empty());
 
   for (int frame : {1, 2}) {
@@ -122,8 +140,11 @@ TEST_F(Cli, RunWritesLayersAndMetadata) {
     EXPECT_TRUE(px.spec.format == OIIO::TypeDesc::FLOAT) << px.spec.format.c_str();
 
     // Metadata: the effective preset, the version, the camera, the input's stamp.
+    // Metadata holds the preset as run, "auto" resolved, so that it reproduces the file.
     const json preset = json::parse(px.spec.get_string_attribute("hbil:preset"));
-    EXPECT_EQ(preset, to_json(Params{}));
+    Params as_run;
+    as_run.outputs = auto_outputs();
+    EXPECT_EQ(preset, to_json(as_run));
     EXPECT_EQ(px.spec.get_string_attribute("hbil:version"), HBIL_VERSION);
     const json cam = json::parse(px.spec.get_string_attribute("hbil:camera"));
     EXPECT_EQ(cam["source"], "sidecar frame_000" + std::to_string(frame) + ".camera.json");
@@ -176,12 +197,15 @@ TEST_F(Cli, ThreadCountDoesNotChangeBytes) {
     const Pixels a = test::read_pixels(outs[0] + frame);
     ASSERT_EQ(a.data.size(), size_t(kSampleW) * kSampleH * kOutputChannels.size());
     const std::string bytes = test::read_text(outs[0] + frame);
+    const std::string png = fs::path(frame).replace_extension(".png").string();
+    const std::string png_bytes = test::read_text(outs[0] + png);
     for (size_t k = 1; k < outs.size(); ++k) {
       SCOPED_TRACE(outs[k] + frame);
       const Pixels b = test::read_pixels(outs[k] + frame);
       ASSERT_EQ(a.data.size(), b.data.size());
       EXPECT_EQ(std::memcmp(a.data.data(), b.data.data(), a.data.size() * sizeof(float)), 0);
       EXPECT_TRUE(test::read_text(outs[k] + frame) == bytes) << "files differ";
+      EXPECT_TRUE(test::read_text(outs[k] + png) == png_bytes) << "PNGs differ";
     }
   }
 }
@@ -212,6 +236,38 @@ TEST_F(Cli, SequenceWithoutSidecarsSolvesTheCamera) {
     EXPECT_LT(rmse, kSolvedCameraAoRmse)
         << "AO with the solved camera differs from AO with the true one";
   }
+}
+
+// An input with only the geometry passes: "auto" falls back to ao and bentcone, says what it
+// left out and why, and writes no display image; naming a colour output instead is an error.
+TEST_F(Cli, AutoOutputsOnAnAoOnlyInput) {
+  for (int n : {1, 2}) {
+    test::copy_exr(sample(n), in_frame(n), {"ViewLayer.DiffCol.", "ViewLayer.DiffDir."});
+    fs::copy_file(sample(n, ".camera.json"), in_frame(n, ".camera.json"));
+  }
+  const RunResult r = hbil(run_args(path("in/frame_####.exr"), path("out/out_####.exr")));
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(contains(r.err, "hbil: outputs: ao, bentcone\n")) << r.err;
+  EXPECT_TRUE(contains(r.err, "left out what the input cannot give")) << r.err;
+  EXPECT_TRUE(contains(r.err, "missing pass: diffcol")) << r.err;
+  const auto files = snapshot(path("out"));
+  EXPECT_EQ(files.size(), 2u) << "two EXRs, no PNG without a composite";
+  const Pixels px = test::read_pixels(path("out/out_0001.exr"));
+  EXPECT_EQ(std::vector<std::string>(px.spec.channelnames.begin(), px.spec.channelnames.end()),
+            kAoChannels);
+  expect_failure(run_args(path("in/frame_####.exr"), path("out/out_####.exr"),
+                          "--set 'outputs=[\"ao\",\"indirect\"]'"),
+                 Exit::missing_pass, {"frame 1", "missing pass: diffcol", "ViewLayer.DiffCol.R"});
+}
+
+TEST_F(Cli, NoDisplayWritesOnlyTheExr) {
+  const RunResult r = hbil(run_args(test::kRoomPoles + "/frame_####.exr", path("out/out_####.exr"),
+                                    "--frames 1 --no-display"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(snapshot(path("out")).size(), 1u);
+  expect_failure(run_args(test::kRoomPoles + "/frame_####.exr", path("out/out_####.exr"),
+                          "--frames 1 --no-display --display-out " + q(path("out/d_####.png"))),
+                 Exit::usage, {"--no-display"});
 }
 
 // --- Failures: exit code, a message naming the file and frame, nothing written --------

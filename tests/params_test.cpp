@@ -52,7 +52,7 @@ TEST(Params, DefaultsAreValidAndWithinTheirRanges) {
     }
   }
   EXPECT_EQ(d["radius"], 1.0);
-  EXPECT_EQ(d["outputs"], json::array({"ao", "bentcone"}));
+  EXPECT_EQ(d["outputs"], json::array({"auto"}));
   EXPECT_EQ(d["passes"]["depth"], "Depth");
   EXPECT_EQ(d["passes"]["normal"], "Normal");
   EXPECT_EQ(d["view_layer"], "");
@@ -199,12 +199,28 @@ TEST(Params, UnknownOrMissingOutput) {
       [] {
         params_from_json(json{{"outputs", json::array({"ao", "gi"})}}, "o.json");
       },
-      Exit::preset, {"o.json", "unknown output 'gi'", "known: ao, bentcone"});
+      Exit::preset, {"o.json", "unknown output 'gi'", "known: auto, ao, bentcone"});
   expect_error(
       [] {
         params_from_json(json{{"outputs", json::array()}}, "o.json");
       },
       Exit::preset, {"'outputs' is empty"});
+}
+
+// "auto" keeps explicit names (once, in their place) and adds the available auto outputs.
+TEST(Params, ResolveAutoOutputs) {
+  Params p;
+  std::vector<std::string> dropped;
+  auto geometry_only = [](const std::string& o) { return o == "ao" || o == "bentcone"; };
+  EXPECT_EQ(resolve_outputs(p, geometry_only, &dropped).outputs,
+            (std::vector<std::string>{"ao", "bentcone"}));
+  EXPECT_EQ(dropped, (std::vector<std::string>{"irradiance", "indirect", "composite"}));
+  EXPECT_EQ(resolve_outputs(p, [](const std::string&) { return true; }).outputs, auto_outputs());
+  p.outputs = {"farfield", "auto", "ao"};
+  EXPECT_EQ(resolve_outputs(p, geometry_only).outputs,
+            (std::vector<std::string>{"farfield", "bentcone", "ao"}));
+  p.outputs = {"indirect"};  // nothing to resolve: explicit outputs are kept as they are
+  EXPECT_EQ(resolve_outputs(p, geometry_only).outputs, p.outputs);
 }
 
 TEST(Params, ApplySetPlainJsonAndDottedKeys) {

@@ -29,7 +29,7 @@ using Clock = std::chrono::steady_clock;
 struct RunOptions {
   std::string input, output, frames;
   int threads = 0;
-  bool quiet = false, verbose = false;
+  bool quiet = false, verbose = false, no_display = false;
   ParamOptions params;
   // Display images through OpenColorIO.
   std::string display_out, display_layer, ocio_config, input_space, display, view;
@@ -99,9 +99,27 @@ std::vector<float> display_pixels(const AoFrame& f, const std::string& layer, in
   return out;
 }
 
+std::string join_outputs(const std::vector<std::string>& v) {
+  std::string s;
+  for (const auto& x : v) s += (s.empty() ? "" : ", ") + x;
+  return s;
+}
+
 void run(const RunOptions& o) {
-  const Params p = o.params.load();
+  const Params requested = o.params.load();
   const Job job = plan(o);
+  // Outputs "auto" are resolved once, on the first frame's header: every frame then writes
+  // the same layers, and a later frame that lacks a pass is an error.
+  std::string why_dropped;
+  const Params p = io::resolve_outputs(
+      io::open_frame(job.in.path(job.frames.front()), job.frames.front(), requested), requested,
+      &why_dropped);
+  if (!o.quiet) {
+    std::cerr << "hbil: outputs: " << join_outputs(p.outputs) << "\n";
+    if (!why_dropped.empty())
+      std::cerr << "hbil: outputs \"auto\" left out what the input cannot give: " << why_dropped
+                << "\n";
+  }
   // Far field: the environment is projected to SH once for the whole run.
   std::optional<SH9> environment;
   if (!p.environment.empty()) environment = io::load_environment(p.environment);
@@ -109,10 +127,17 @@ void run(const RunOptions& o) {
   std::optional<io::DisplayTransform> display;
   std::optional<io::FramePattern> display_pattern;
   std::string display_layer = o.display_layer;
-  if (!o.display_out.empty()) {
-    if (!io::is_display_image_path(o.display_out))
+  // Without --display-out, a PNG of the composite (or of --display-layer) goes beside each
+  // EXR, unless --no-display.
+  std::string display_out = o.display_out;
+  if (display_out.empty() && !o.no_display && (p.wants("composite") || !display_layer.empty()))
+    display_out = fs::path(o.output).replace_extension(".png").string();
+  if (!display_out.empty() && o.no_display)
+    throw Error(Exit::usage, "--display-out and --no-display contradict each other");
+  if (!display_out.empty()) {
+    if (!io::is_display_image_path(display_out))
       throw Error(Exit::usage,
-                  "--display-out " + o.display_out + ": use a .png, .jpg, .jpeg or .exr name");
+                  "--display-out " + display_out + ": use a .png, .jpg, .jpeg or .exr name");
     if (display_layer.empty())
       display_layer = p.wants("composite") ? "composite" : p.outputs.front();
     if (display_layer == "bentcone" || !p.wants(display_layer))
@@ -122,11 +147,16 @@ void run(const RunOptions& o) {
                       "farfield, composite) named in outputs");
     display.emplace(io::DisplaySettings{o.ocio_config, o.input_space, o.display, o.view},
                     shipped_ocio_config());
-    display_pattern.emplace(o.display_out);
+    display_pattern.emplace(display_out);
     if (job.frames.size() > 1 && !display_pattern->is_sequence())
       throw Error(Exit::usage,
-                  "--display-out " + o.display_out + ": a sequence needs a frame pattern");
-    if (!o.quiet) std::cerr << "hbil: display images: " << display->describe() << "\n";
+                  "--display-out " + display_out + ": a sequence needs a frame pattern");
+    for (int f : job.frames)
+      if (display_pattern->path(f) == job.out.path(f))
+        throw Error(Exit::usage, "--display-out " + display_out + " is the EXR output's name");
+    if (!o.quiet)
+      std::cerr << "hbil: display images " << display_out << " (" << display_layer
+                << "): " << display->describe() << "\n";
   }
   std::unique_ptr<tbb::global_control> threads;
   if (o.threads > 0)
@@ -140,11 +170,15 @@ void run(const RunOptions& o) {
   // Output folders this run creates (the topmost missing ancestor of each): removed again
   // when the run fails.
   std::set<fs::path> created;
-  for (int f : job.frames) {
-    fs::path dir = fs::absolute(fs::path(job.out.path(f))).parent_path(), top;
+  auto note_created = [&created](const std::string& file) {
+    fs::path dir = fs::absolute(fs::path(file)).parent_path(), top;
     for (; !dir.empty() && !fs::exists(dir) && dir != dir.parent_path(); dir = dir.parent_path())
       top = dir;
     if (!top.empty()) created.insert(top);
+  };
+  for (int f : job.frames) {
+    note_created(job.out.path(f));
+    if (display_pattern) note_created(display_pattern->path(f));
   }
   auto discard = [&] {
     std::error_code ec;
@@ -244,9 +278,10 @@ void add_run(CLI::App& app) {
   cmd->add_flag(
       "-v,--verbose", o->verbose,
       "also print the time each frame spends reading, finding the camera, computing and writing");
-  cmd->add_option(
-      "--display-out", o->display_out,
-      "also write a display image per frame (.png, .jpg, .exr; frame pattern) through OpenColorIO");
+  cmd->add_option("--display-out", o->display_out,
+                  "display image per frame (.png, .jpg, .exr; frame pattern) through OpenColorIO; "
+                  "default: OUTPUT with .png when composite (or --display-layer) is computed");
+  cmd->add_flag("--no-display", o->no_display, "write no display images");
   cmd->add_option(
       "--display-layer", o->display_layer,
       "layer shown in the display image: composite (default when computed), ao, irradiance, "

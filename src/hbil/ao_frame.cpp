@@ -27,8 +27,12 @@ AoFrame compute_ao_frame(const GBuffer& g, const Camera& cam, const Params& p,
   return compute_ao_frame(make_view_gbuffer(g, cam, p), g, cam, p, environment);
 }
 
-AoFrame compute_ao_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& cam, const Params& p,
-                         const SH9* environment) {
+AoFrame compute_ao_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& cam,
+                         const Params& requested, const SH9* environment) {
+  // "auto": the colour outputs when the G-buffer holds what they gather from.
+  const Params p = resolve_outputs(requested, [&g](const std::string& o) {
+    return o == "ao" || o == "bentcone" || (!g.diffcol.empty() && !g.diffdir.empty());
+  });
   const std::vector<Vec3>& world_normal = g.normal;
   const HorizonConfig c = make_horizon_config(p, cam);
   const bool gather = p.wants("irradiance") || p.wants("indirect") || p.wants("composite");

@@ -30,6 +30,8 @@ struct AoFrame {
 // (empty: none yet).
 std::vector<Vec3> source_radiance(const GBuffer& g, const std::vector<Vec3>& irradiance);
 
+// Outputs "auto" (Params::outputs) resolve to ao and bentcone, plus irradiance, indirect and
+// composite when `g` holds DiffCol and DiffDir.
 // Background pixels get ao = 1, bent = the input normal as stored (zero for Blender's
 // background) and cone_cos = 0 (a full hemisphere).
 // `environment` (SH of the far field, world space) is needed by the farfield output.

@@ -77,6 +77,33 @@ const std::vector<std::string>& known_outputs() {
   return o;
 }
 
+const std::vector<std::string>& auto_outputs() {
+  static const std::vector<std::string> o = {"ao", "bentcone", "irradiance", "indirect",
+                                             "composite"};
+  return o;
+}
+
+Params resolve_outputs(const Params& p, const std::function<bool(const std::string&)>& available,
+                       std::vector<std::string>* dropped) {
+  if (!p.wants("auto")) return p;
+  Params r = p;
+  r.outputs.clear();
+  for (const std::string& o : p.outputs) {
+    if (o != "auto") {
+      if (!r.wants(o)) r.outputs.push_back(o);
+      continue;
+    }
+    for (const std::string& a : auto_outputs()) {
+      if (p.wants(a) || r.wants(a)) continue;
+      if (available(a))
+        r.outputs.push_back(a);
+      else if (dropped)
+        dropped->push_back(a);
+    }
+  }
+  return r;
+}
+
 json to_json(const Params& p) {
   json j;
   for (const ParamInfo& info : params_table()) {
@@ -206,8 +233,9 @@ void validate(const Params& p, const std::string& where) {
          "output 'farfield' needs key 'environment' (an equirectangular EXR or \"rgb:r,g,b\")");
   for (const auto& o : p.outputs) {
     const auto& k = known_outputs();
-    if (std::find(k.begin(), k.end(), o) == k.end())
-      fail(where, "unknown output '" + o + "' in 'outputs' (known: " + allowed_list(k) + ")");
+    if (o != "auto" && std::find(k.begin(), k.end(), o) == k.end())
+      fail(where, "unknown output '" + o + "' in 'outputs' (known: auto, " + allowed_list(k) +
+                      ")");
   }
 }
 

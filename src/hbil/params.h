@@ -6,6 +6,7 @@
 // out-of-range value is an Error(Exit::preset) naming the key, the value and the range.
 #pragma once
 
+#include <functional>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -46,7 +47,9 @@ struct Params {
   std::map<std::string, nlohmann::json> passes = default_passes();
 
   // --- Output ---
-  std::vector<std::string> outputs = {"ao", "bentcone"};
+  // "auto": ao, bentcone, and irradiance, indirect and composite when the input has the
+  // colour passes they need (see resolve_outputs); may be combined with explicit names.
+  std::vector<std::string> outputs = {"auto"};
 
   static std::map<std::string, nlohmann::json> default_passes();
   // Number of slice directions one pixel's result integrates (after re-interleaving).
@@ -67,6 +70,13 @@ const std::vector<ParamInfo>& params_table();
 // The G-buffer fields a preset may map, and the outputs hbil can write.
 const std::vector<std::string>& gbuffer_fields();
 const std::vector<std::string>& known_outputs();
+
+// The outputs "auto" stands for, in order.
+const std::vector<std::string>& auto_outputs();
+// `p` with "auto" replaced by the auto_outputs() for which available(output) holds (those
+// already named explicitly are not repeated); the others are appended to `dropped`.
+Params resolve_outputs(const Params& p, const std::function<bool(const std::string&)>& available,
+                       std::vector<std::string>* dropped = nullptr);
 
 nlohmann::json to_json(const Params& p);
 // Starts from `base` and applies the keys in j; `where` names the source in errors

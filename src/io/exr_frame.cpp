@@ -109,7 +109,25 @@ InputFrame open_frame(const std::string& path, int frame, const Params& p) {
   return f;
 }
 
-std::vector<std::string> fields_needed(const InputFrame& f, const Params& p) {
+Params resolve_outputs(const InputFrame& f, const Params& p, std::string* why_dropped) {
+  if (why_dropped) why_dropped->clear();
+  return hbil::resolve_outputs(p, [&](const std::string& o) {
+    // ao and bentcone are always kept: what they lack is an error fields_needed() reports.
+    if (o == "ao" || o == "bentcone") return true;
+    Params one = p;
+    one.outputs = {o};
+    try {
+      fields_needed(f, one);
+      return true;
+    } catch (const Error& e) {
+      if (why_dropped && why_dropped->empty()) *why_dropped = e.what();
+      return false;
+    }
+  });
+}
+
+std::vector<std::string> fields_needed(const InputFrame& f, const Params& requested) {
+  const Params p = requested.wants("auto") ? resolve_outputs(f, requested) : requested;
   std::vector<std::string> need;
   const bool geometry = !p.outputs.empty();  // every output comes from the horizon search
   if (geometry) {

@@ -47,6 +47,11 @@ InputFrame open_frame(const std::string& path, int frame, const Params& p);
 // Error(Exit::missing_pass) naming the channels looked for.
 std::vector<std::string> fields_needed(const InputFrame& f, const Params& p);
 
+// `p` with outputs "auto" resolved against what this frame holds: ao and bentcone, and each
+// of irradiance, indirect and composite whose passes are present. `why_dropped` receives
+// the missing-pass message of the first auto output left out ("" when none was).
+Params resolve_outputs(const InputFrame& f, const Params& p, std::string* why_dropped = nullptr);
+
 // Reads the given fields (all must be present). Checks the data: a depth that is not finite
 // or negative, or a non-finite normal or position, is Error(Exit::bad_data) naming the
 // frame, file, channel, pixel and value. Background (depth >= background_depth) is allowed.
