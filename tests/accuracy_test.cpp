@@ -37,17 +37,18 @@ ErrorStats ao_error(const std::string& scene, const Params& p) {
 TEST(AccuracyAgainstCycles, CourtyardAo) {
   const ErrorStats e = ao_error("courtyard", Params{});
   EXPECT_GT(e.count, 200000u);
-  EXPECT_GT(e.psnr(), 23.3) << "rmse " << e.rmse() << " mean "
-                            << e.mean_error();  // measured 23.56 dB
+  EXPECT_GT(e.psnr(), 23.2) << "rmse " << e.rmse() << " mean "
+                            << e.mean_error();  // measured 23.46 dB
 }
 
-// The thin-object scene: poles and a fence. The default bitmask (thickness 0.4) lets light
-// pass behind them; the horizon method (infinitely thick occluders) measures 18.56 dB here.
+// The thin-object scene: poles and a fence. The default bitmask (each sample as thick as the
+// back-face layer says) lets light pass behind them; the horizon method (infinitely thick
+// occluders) measures 18.56 dB here.
 TEST(AccuracyAgainstCycles, RoomWithPolesAo) {
   const ErrorStats e = ao_error("room_poles", Params{});
   EXPECT_GT(e.count, 200000u);
-  EXPECT_GT(e.psnr(), 18.4) << "rmse " << e.rmse() << " mean "
-                            << e.mean_error();  // measured 18.68 dB
+  EXPECT_GT(e.psnr(), 18.7) << "rmse " << e.rmse() << " mean "
+                            << e.mean_error();  // measured 18.95 dB
 }
 
 TEST(AccuracyAgainstCycles, BitmaskBeatsHorizonOnBothScenes) {
@@ -98,15 +99,29 @@ Params indirect_params() {
 TEST(AccuracyAgainstCycles, CourtyardIndirectOneBounce) {
   const ErrorStats e = indirect_error("courtyard", indirect_params());
   EXPECT_GT(e.count, 600000u);
-  EXPECT_GT(e.psnr(), 27.6) << "rmse " << e.rmse() << " mean "
-                            << e.mean_error();  // measured 27.85 dB
+  EXPECT_GT(e.psnr(), 28.2) << "rmse " << e.rmse() << " mean "
+                            << e.mean_error();  // measured 28.50 dB
 }
 
 TEST(AccuracyAgainstCycles, RoomWithPolesIndirectOneBounce) {
   const ErrorStats e = indirect_error("room_poles", indirect_params());
   EXPECT_GT(e.count, 600000u);
-  EXPECT_GT(e.psnr(), 28.2) << "rmse " << e.rmse() << " mean "
-                            << e.mean_error();  // measured 28.50 dB
+  EXPECT_GT(e.psnr(), 28.6) << "rmse " << e.rmse() << " mean "
+                            << e.mean_error();  // measured 28.92 dB
+}
+
+// The samples carry a BackFaces.Depth.Z layer (samples/blender/backfaces.py). Measured
+// thickness beats the constant 0.4 on indirect light in both scenes (courtyard 28.50 vs
+// 27.85 dB, room_poles 28.92 vs 28.50) and on the thin-object scene's AO (18.95 vs 18.68);
+// the courtyard's AO loses 0.1 dB (23.46 vs 23.56), so it is not asserted.
+TEST(AccuracyAgainstCycles, BackFaceThicknessBeatsTheConstant) {
+  const Params constant = apply_set(indirect_params(), "passes.backdepth=\"\"");
+  for (const char* scene : {"courtyard", "room_poles"})
+    EXPECT_GT(indirect_error(scene, indirect_params()).psnr(),
+              indirect_error(scene, constant).psnr() + 0.3)
+        << scene;
+  const Params ao, ao_constant = apply_set(ao, "passes.backdepth=\"\"");
+  EXPECT_GT(ao_error("room_poles", ao).psnr(), ao_error("room_poles", ao_constant).psnr() + 0.2);
 }
 
 }  // namespace

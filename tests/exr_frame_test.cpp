@@ -309,6 +309,38 @@ TEST_F(ExrFrame, MissingOrUnreadableFileIsInputError) {
                {"frame 2", text, "cannot read"});
 }
 
+TEST_F(ExrFrame, BackFaceLayerIsReadForTheBitmaskOnly) {
+  // Blender writes a second view layer "BackFaces" (samples/blender/backfaces.py); its
+  // Depth.Z sorts before ViewLayer's and must not be taken for the main layer.
+  const std::string path = file("frame_0003.exr");
+  auto channels = blender_channels("ViewLayer");
+  channels.push_back("BackFaces.Depth.Z");
+  test::write_exr(path, kW, kH, channels, [&](int x, int y, int c) {
+    return channels[c] == "BackFaces.Depth.Z" ? depth_at(x, y) + 0.5f
+                                              : value_for(channels[c], x, y);
+  });
+  Params p;
+  const InputFrame f = open_frame(path, 3, p);
+  EXPECT_EQ(f.view_layer, "ViewLayer");
+  ASSERT_TRUE(f.has("backdepth"));
+  EXPECT_EQ(f.spec.channelnames[f.channels.at("backdepth")[0]], "BackFaces.Depth.Z");
+  ASSERT_EQ(p.method, "bitmask");
+  EXPECT_EQ(fields_needed(f, p),
+            (std::vector<std::string>{"depth", "normal", "backdepth", "alpha"}));
+  const GBuffer g = read_fields(f, fields_needed(f, p), p);
+  ASSERT_EQ(g.backdepth.size(), g.pixels());
+  EXPECT_EQ(g.backdepth[3 * kW + 5], depth_at(5, 3) + 0.5f);
+  EXPECT_EQ(g.depth[3 * kW + 5], depth_at(5, 3));
+
+  Params horizon = p;
+  horizon.method = "horizon";  // thickness means nothing to the horizon method
+  EXPECT_EQ(fields_needed(f, horizon), (std::vector<std::string>{"depth", "normal", "alpha"}));
+  Params off = apply_set(p, "passes.backdepth=\"\"");
+  const InputFrame f_off = open_frame(path, 3, off);
+  EXPECT_FALSE(f_off.has("backdepth"));
+  EXPECT_EQ(f_off.view_layer, "ViewLayer");
+}
+
 TEST_F(ExrFrame, CameraSolvedFromPositionWithoutSidecar) {
   const std::string src = test::kRoomPoles + "/frame_0001.exr";
   if (!fs::exists(src)) GTEST_SKIP() << src << " is absent";

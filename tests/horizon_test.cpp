@@ -171,13 +171,26 @@ TEST(Interleave, DeinterleavedBuffersMatchStridedReadInPlace) {
   Camera cam;
   const GBuffer g = busy_scene(cam);
   const Params p;
-  const ViewGBuffer v = make_view_gbuffer(g, cam, p);
+  ViewGBuffer v = make_view_gbuffer(g, cam, p);
   const HorizonConfig c = make_horizon_config(p, cam);
-  const HorizonImage a = horizon_interleaved(v, c, 2, nullptr, true),
-                     b = horizon_interleaved(v, c, 2, nullptr, false);
+  // With a radiance source and a per-pixel thickness too: both must reach the march.
+  std::vector<Vec3> radiance(v.pixels());
+  v.thickness.assign(v.pixels(), -1.f);
+  for (size_t i = 0; i < v.pixels(); ++i) {
+    radiance[i] = Vec3{float(i % 7), float(i % 5), 1.f};
+    if (i % 3) v.thickness[i] = 0.01f * float(i % 11);
+  }
+  const HorizonImage a = horizon_interleaved(v, c, 2, &radiance, true),
+                     b = horizon_interleaved(v, c, 2, &radiance, false),
+                     constant = horizon_interleaved(make_view_gbuffer(g, cam, p), c, 2, &radiance);
   ASSERT_EQ(a.ao.size(), b.ao.size());
+  ASSERT_EQ(a.irradiance.size(), b.irradiance.size());
   EXPECT_EQ(0, std::memcmp(a.ao.data(), b.ao.data(), a.ao.size() * sizeof(float)));
   EXPECT_EQ(0, std::memcmp(a.bent.data(), b.bent.data(), a.bent.size() * sizeof(Vec3)));
+  EXPECT_EQ(0, std::memcmp(a.irradiance.data(), b.irradiance.data(),
+                           a.irradiance.size() * sizeof(Vec3)));
+  EXPECT_NE(0, std::memcmp(a.ao.data(), constant.ao.data(), a.ao.size() * sizeof(float)))
+      << "the per-pixel thickness was not used";
 }
 
 TEST(Interleave, BlockCoversEvenlySpacedDirections) {

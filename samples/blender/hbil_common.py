@@ -11,6 +11,8 @@ Command line common to all scene scripts (after ``--``)::
                        main:    8 diffuse bounces, all passes (Combined, Depth, Normal,
                                 Position, Vector, DiffCol/Dir/Ind, Emit, Env, AO)
                        bounce1: 1 diffuse bounce, DiffCol/Dir/Ind + Depth only
+    --mode backfaces   only the BackFaces view layer (backfaces.py): the depth of the
+                       first back face, 1 sample; merge_backdepth.py adds it to main frames
     --samples N        Cycles samples per pixel (fixed, no adaptive sampling)
     --seed S           Cycles seed (fixed for all frames)
     --frames 1-8       frames to render
@@ -41,7 +43,7 @@ def parse_args():
     argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
     p = argparse.ArgumentParser()
     p.add_argument("--out", required=False)
-    p.add_argument("--mode", choices=["main", "bounce1"], default="main")
+    p.add_argument("--mode", choices=["main", "bounce1", "backfaces"], default="main")
     p.add_argument("--samples", type=int, default=64)
     p.add_argument("--seed", type=int, default=1)
     p.add_argument("--frames", default="%d-%d" % FRAMES)
@@ -304,6 +306,10 @@ def configure(scene, mode, samples, seed, ao_distance=1.0):
     vl.cycles.denoising_store_passes = False
     vl.cycles.use_pass_shadow_catcher = False
     vl.use_pass_cryptomatte_object = False
+    if mode == "backfaces":
+        vl.use = False
+        import backfaces  # noqa: E402  (same folder, on sys.path)
+        backfaces.add_backface_layer(scene, samples=1)
 
 
 # --------------------------------------------------------------------------- #

@@ -8,7 +8,8 @@
 # Per scene: build the scene (Python, factory startup) -> render frames 1-8
 # (main: 8 diffuse bounces, all passes) -> render the 1-bounce reference
 # (bounce1/) -> render frame 1 again with another seed and estimate the
-# per-pixel noise -> repack every EXR (half / float, ZIP) -> check sidecars
+# per-pixel noise -> render the back faces (backfaces.py, 1 spp) -> repack every
+# EXR (half / float, ZIP) -> add BackFaces.Depth.Z to the main frames -> check sidecars
 # (reprojection of Position, standalone export_camera.py == render-time).
 # Needs: blender (3.4), python3 with OpenImageIO + numpy (Debian:
 # python3-openimageio python3-numpy).  Logs and scratch go to $WORK.
@@ -80,12 +81,18 @@ for scene in "${SCENES[@]}"; do
       --json "$out/noise_estimate.json" | tee "$WORK/$scene.noise.txt"
   fi
 
+  log "$scene: back faces (1 spp) -> BackFaces.Depth.Z in the main frames"
+  rm -rf "$WORK/back_$scene"
+  blender_scene "$scene" backfaces --out "$WORK/back_$scene" --mode backfaces --samples 1 \
+    --seed "$SEED" --frames "$FRAMES"
+
   log "$scene: repack"
   "$PYTHON" "$HERE/repack_exr.py" "$out"/frame_*.exr > "$WORK/$scene.repack.log"
   # Blender writes Combined even with the pass off: drop it from the 1-bounce files
   "$PYTHON" "$HERE/repack_exr.py" --drop Combined "$out"/bounce1/frame_*.exr \
     >> "$WORK/$scene.repack.log"
   tail -n 2 "$WORK/$scene.repack.log"
+  "$PYTHON" "$HERE/merge_backdepth.py" "$out" "$WORK/back_$scene" | tee "$WORK/$scene.back.txt"
 
   log "$scene: check sidecars"
   "$PYTHON" "$HERE/check_sidecar.py" "$out"/frame_*.exr | tee "$WORK/$scene.check.txt"

@@ -332,8 +332,9 @@ std::vector<unsigned char> make_mask(Image& test, Image& ref, const Options& o,
     described = o.mask + " != 0";
     return m;
   }
+  // The front depth: not a back-face layer's (samples/blender/backfaces.py), which sorts first.
   int c = find(ref, [&](const std::string& s) {
-    return ends_with(s, ".Depth.Z") || s == "Z" || s == "depth.Z";
+    return (ends_with(s, ".Depth.Z") && s != "BackFaces.Depth.Z") || s == "Z" || s == "depth.Z";
   });
   if (c >= 0) {
     const auto v = read_channel(ref, c);

@@ -9,6 +9,7 @@
 #include <memory>
 #include <optional>
 #include <set>
+#include <sstream>
 
 #include "cli/commands.h"
 #include "hbil/ao_frame.h"
@@ -111,14 +112,29 @@ void run(const RunOptions& o) {
   // Outputs "auto" are resolved once, on the first frame's header: every frame then writes
   // the same layers, and a later frame that lacks a pass is an error.
   std::string why_dropped;
-  const Params p = io::resolve_outputs(
-      io::open_frame(job.in.path(job.frames.front()), job.frames.front(), requested), requested,
-      &why_dropped);
+  const io::InputFrame first =
+      io::open_frame(job.in.path(job.frames.front()), job.frames.front(), requested);
+  const Params p = io::resolve_outputs(first, requested, &why_dropped);
   if (!o.quiet) {
     std::cerr << "hbil: outputs: " << join_outputs(p.outputs) << "\n";
     if (!why_dropped.empty())
       std::cerr << "hbil: outputs \"auto\" left out what the input cannot give: " << why_dropped
                 << "\n";
+    if (p.method == "bitmask") {
+      std::ostringstream s;
+      s << "hbil: bitmask thickness: ";
+      if (first.has("backdepth"))
+        s << "per pixel from " << first.spec.channelnames[first.channels.at("backdepth")[0]]
+          << " (" << p.thickness << " where it has no back face)";
+      else
+        s << p.thickness << " world units"
+          << (p.thickness_growth > 0 ? " + " + std::to_string(p.thickness_growth) + " x depth"
+                                     : std::string())
+          << (first.wanted.count("backdepth")
+                  ? " (no back-face channel " + p.passes.at("backdepth").dump() + ")"
+                  : std::string(" (passes.backdepth is off)"));
+      std::cerr << s.str() << "\n";
+    }
   }
   // Far field: the environment is projected to SH once for the whole run.
   std::optional<SH9> environment;

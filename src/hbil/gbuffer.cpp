@@ -31,6 +31,8 @@ ViewGBuffer make_view_gbuffer(const GBuffer& g, const Camera& cam, const Params&
   v.position.assign(g.pixels(), Vec3{0, 0, ViewGBuffer::kBackground});
   v.normal.assign(g.pixels(), Vec3{});
   const bool from_depth = !g.depth.empty();
+  const bool back = !g.backdepth.empty();
+  if (back) v.thickness.assign(g.pixels(), -1.f);
   tbb::parallel_for(0, g.height, [&](int y) {
     for (int x = 0; x < g.width; ++x) {
       const size_t i = size_t(y) * g.width + x;
@@ -49,6 +51,11 @@ ViewGBuffer make_view_gbuffer(const GBuffer& g, const Camera& cam, const Params&
       }
       v.position[i] = Vec3(pv);
       v.normal[i] = Vec3(n);
+      if (back) {
+        const double zb = g.backdepth[i], zf = pv.z;
+        if (zb < p.background_depth && zb > zf * 1.001)
+          v.thickness[i] = float(length(pv) * (zb - zf) / zf);
+      }
     }
   });
   return v;

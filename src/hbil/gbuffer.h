@@ -15,6 +15,7 @@ namespace hbil {
 struct GBuffer {
   int width = 0, height = 0;
   std::vector<float> depth;    // planar view depth, world units
+  std::vector<float> backdepth;  // planar depth of the first back face behind it (optional)
   std::vector<Vec3> normal;    // world space, pixel-filtered (may be shorter than 1)
   std::vector<Vec3> position;  // world space
   std::vector<float> alpha;    // coverage; 0 = background
@@ -36,6 +37,9 @@ struct ViewGBuffer {
   int width = 0, height = 0;
   std::vector<Vec3> position;
   std::vector<Vec3> normal;
+  // Occluder thickness along each pixel's view ray, world units, from the back-face depth:
+  // empty without one; negative where it says nothing (the constant thickness applies).
+  std::vector<float> thickness;
 
   size_t pixels() const { return size_t(width) * size_t(height); }
   bool is_background(size_t i) const { return !(position[i].z < kBackground); }
@@ -45,7 +49,10 @@ struct ViewGBuffer {
 // Builds the view-space G-buffer. Position comes from depth when depth was read, else
 // from the world position through the camera. Background: depth >= background_depth,
 // alpha == 0, or a normal of zero length. Normals are renormalised (Blender averages
-// them across silhouettes, so their length can fall to 0.25).
+// them across silhouettes, so their length can fall to 0.25). With a back-face depth zb and
+// front depth zf (both planar), thickness = |P| (zb − zf) / zf, the length of the pixel's ray
+// inside the object; where zb is background or not behind zf by more than 0.1 % (the
+// visible surface is itself a back face, or a single-sided surface), it is −1.
 ViewGBuffer make_view_gbuffer(const GBuffer& g, const Camera& cam, const Params& p);
 
 }  // namespace hbil

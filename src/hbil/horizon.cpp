@@ -17,6 +17,13 @@ inline float sgn(float t) {
 // Below this |cos| between the sample's normal and the corrected ray the tangent-plane
 // correction is unstable (silhouettes, poles seen side-on) and the sample is used as is.
 constexpr float kGrazing = 0.1f;
+// acos to 7e-5 rad (Abramowitz & Stegun 4.4.45), well under the bitmask's sector width of
+// π/32 = 0.098 rad; used for the extents of bitmask occluders.
+inline float fast_acos(float x) {
+  const float a = std::fabs(x);
+  const float r = std::sqrt(1.f - a) * (1.5707288f + a * (-0.2121144f + a * (0.0742610f - 0.0187293f * a)));
+  return x < 0.f ? kPi - r : r;
+}
 }  // namespace
 
 HorizonConfig make_horizon_config(const Params& p, const Camera& cam) {
@@ -145,11 +152,15 @@ PixelSums march_pixel(const SampleView& view, int i, int j, const Vec3& P, const
     for (int side = 0; side < 2; ++side) {
       const float sx = side == 0 ? dx : -dx, sy = side == 0 ? dy : -dy;
       const float sign = side == 0 ? 1.f : -1.f;  // θ > 0 on the +D side
+      // Offset of step k along the line, texels.
+      auto o_at = [&](int q) {
+        return q < c.steps ? 1.f + (r_tex - 1.f) * fraction[q]
+                           : std::max(r_tex, 1.f) + (rg_tex - r_tex) * fraction[q];
+      };
       for (int k = 0; k < n_steps; ++k) {
         const bool near = k < c.steps;
         if (near && r_tex < 1.f) continue;  // the AO radius is under a texel
-        const float o = near ? 1.f + (r_tex - 1.f) * fraction[k]
-                             : std::max(r_tex, 1.f) + (rg_tex - r_tex) * fraction[k];
+        const float o = o_at(k);
         const int oi = int(std::floor(sx * o + 0.5f)), oj = int(std::floor(sy * o + 0.5f));
         if (oi == 0 && oj == 0) continue;
         const int si = i + oi, sj = j + oj;
@@ -191,12 +202,41 @@ PixelSums march_pixel(const SampleView& view, int i, int j, const Vec3& P, const
         } else {
           // Therrien et al. 2023, Algorithm 1: the sample is an occluder of thickness t
           // along its view ray; it covers [θf, θb] and lights the sectors it newly covers.
-          const float t = c.thickness + c.thickness_growth * S.z;
-          const Vec3 back = S + S * (t / length(S)) - P;
-          const float theta_b =
-              sign * std::acos(std::clamp(dot(back, wo) / length(back), -1.f, 1.f));
-          const float lo = (std::min(theta_f, theta_b) - sector0) / kSectorWidth;
-          const float hi = (std::max(theta_f, theta_b) - sector0) / kSectorWidth;
+          // Thickness: measured (back faces) where known, else the constant heuristic.
+          const bool measured = view.thickness && view.thickness[k_s] >= 0.f;
+          const float t = measured ? view.thickness[k_s] : c.thickness + c.thickness_growth * S.z;
+          auto angle = [&](const Vec3& X) {
+            const Vec3 d = X - P;
+            return sign * fast_acos(std::clamp(dot(d, wo) / length(d), -1.f, 1.f));
+          };
+          const float theta_b = angle(S + S * (t / length(S)));
+          float th_lo = std::min(theta_f, theta_b), th_hi = std::max(theta_f, theta_b);
+          if (measured) {
+            // A measured thickness is the object's own, so the sample must also stand for the
+            // surface between it and its neighbours, which a point misses (light would leak
+            // between samples on a wall): it covers its tangent plane between the rays
+            // through the midpoints to its neighbours on the line, extruded by t along them.
+            // (The constant thickness is a heuristic tuned with point samples; see horizon.h.)
+            // The first sample reaches back only half way to P: nearer, the direction from P
+            // to a point of another sample's plane is dominated by sub-pixel error (Blender's
+            // depth is one jittered sample, P is placed at the pixel centre), so within about
+            // one texel of a crease the surface between P and its first sample is missed.
+            const float lo_o = 0.5f * (o + (k == 0 ? 0.f : std::min(o_at(k - 1), o)));
+            const float hi_o = k + 1 < n_steps ? 0.5f * (o + std::max(o_at(k + 1), o)) : o;
+            const float plane = dot(S, n_s);
+            for (float oo : {lo_o, hi_o}) {
+              const Vec3 r = ray_P + dv * (sign * oo) * float(view.stride);
+              const float den = dot(r, n_s);
+              if (!(std::fabs(den) > kGrazing * length(r))) continue;
+              const Vec3 X = r * (plane / den);
+              if (!(X.z > 0.f)) continue;
+              const float a = angle(X), b = angle(X + X * (t / length(X)));
+              th_lo = std::min(th_lo, std::min(a, b));
+              th_hi = std::max(th_hi, std::max(a, b));
+            }
+          }
+          const float lo = (th_lo - sector0) / kSectorWidth;
+          const float hi = (th_hi - sector0) / kSectorWidth;
           // "Round" criterion: a sector counts when at least half covered.
           const int a = std::clamp(int(std::floor(lo + 0.5f)), 0, kSectors);
           const int b = std::clamp(int(std::floor(hi + 0.5f)), 0, kSectors);

@@ -29,6 +29,12 @@
 //    dω = |sin θ| dθ dφ requires, and each slice's screen line is derived from it. Spacing
 //    them evenly in screen angle (HBAO, XeGTAO) is the same only at the image centre; off
 //    centre it biases AO (0.02 on an unoccluded oblique floor with 32 slices).
+//  - Bitmask thickness from back faces (Therrien et al. use one constant): where the input
+//    has a back-face depth, a sample occludes along its ray as far as its object really
+//    extends. That thickness is honest, unlike the constant (tuned on point samples to also
+//    stand for the surface between samples), so such a sample is not a point: it covers its
+//    tangent plane between the rays half way to its neighbours on the line, extruded by the
+//    thickness. Without that, light leaks between the samples of a 10 cm wall.
 //  - The cone aperture (eq. 12) uses the uniform (solid-angle) visibility Ω/2π, the quantity
 //    eq. 12 is derived from, not the cosine-weighted AO: cos α = 1 − Ω/2π.
 #pragma once
@@ -75,6 +81,9 @@ struct SampleView {
   std::ptrdiff_t col = 1, row = 0;
   int stride = 1;                  // full-resolution pixels per texel (4 when deinterleaved)
   const Vec3* radiance = nullptr;  // source radiance L_d (eq. 16); null: no gathering
+  // Bitmask occluder thickness along the view ray per texel (from back faces); null or a
+  // negative value: the constant of HorizonConfig.
+  const float* thickness = nullptr;
   std::ptrdiff_t index(int i, int j) const { return j * row + i * col; }
 };
 

@@ -56,7 +56,8 @@ HorizonImage horizon_full(const ViewGBuffer& g, const HorizonConfig& c, int slic
                         1,
                         g.width,
                         1,
-                        radiance ? radiance->data() : nullptr};
+                        radiance ? radiance->data() : nullptr,
+                        g.thickness.empty() ? nullptr : g.thickness.data()};
   tbb::parallel_for(0, g.height, [&](int y) {
     for (int x = 0; x < g.width; ++x) {
       const size_t i = size_t(y) * g.width + x;
@@ -77,6 +78,7 @@ HorizonImage horizon_interleaved(const ViewGBuffer& g, const HorizonConfig& c, i
   struct Sub {
     int ox, oy, w, h;
     std::vector<Vec3> pos, nrm, rad;  // contiguous copies (empty when reading in place)
+    std::vector<float> thick;
     SampleView view;
     std::vector<float> phi;
     std::vector<float> fraction;  // step positions, with this phase's jitter
@@ -100,15 +102,24 @@ HorizonImage horizon_interleaved(const ViewGBuffer& g, const HorizonConfig& c, i
       s.pos.resize(size_t(s.w) * s.h);
       s.nrm.resize(size_t(s.w) * s.h);
       if (radiance) s.rad.resize(size_t(s.w) * s.h);
+      if (!g.thickness.empty()) s.thick.resize(size_t(s.w) * s.h);
       for (int j = 0; j < s.h; ++j)
         for (int i = 0; i < s.w; ++i) {
           const size_t src = size_t(4 * j + s.oy) * g.width + (4 * i + s.ox);
           s.pos[size_t(j) * s.w + i] = g.position[src];
           s.nrm[size_t(j) * s.w + i] = g.normal[src];
           if (radiance) s.rad[size_t(j) * s.w + i] = (*radiance)[src];
+          if (!s.thick.empty()) s.thick[size_t(j) * s.w + i] = g.thickness[src];
         }
-      s.view = SampleView{
-          s.pos.data(), s.nrm.data(), s.w, s.h, 1, s.w, 4, radiance ? s.rad.data() : nullptr};
+      s.view = SampleView{s.pos.data(),
+                          s.nrm.data(),
+                          s.w,
+                          s.h,
+                          1,
+                          s.w,
+                          4,
+                          radiance ? s.rad.data() : nullptr,
+                          s.thick.empty() ? nullptr : s.thick.data()};
     } else {
       const size_t first = size_t(s.oy) * g.width + s.ox;
       s.view = SampleView{g.position.data() + first,
@@ -117,7 +128,9 @@ HorizonImage horizon_interleaved(const ViewGBuffer& g, const HorizonConfig& c, i
                           s.h,
                           4,
                           std::ptrdiff_t(4) * g.width,
-                          4};
+                          4,
+                          radiance ? radiance->data() + first : nullptr,
+                          g.thickness.empty() ? nullptr : g.thickness.data() + first};
     }
   });
   // March every sub-buffer row; write results back to full resolution (re-interleave).

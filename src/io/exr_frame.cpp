@@ -16,7 +16,7 @@ using nlohmann::json;
 const std::vector<std::string>& field_components(const std::string& field) {
   static const std::vector<std::string> depth = {"Z"}, xyz = {"X", "Y", "Z"}, alpha = {"A"},
                                         rgb = {"R", "G", "B"};
-  if (field == "depth") return depth;
+  if (field == "depth" || field == "backdepth") return depth;
   if (field == "normal" || field == "position") return xyz;
   if (field == "alpha") return alpha;
   return rgb;  // colour passes: diffcol, diffdir, emit, env, gloss*, trans*
@@ -74,16 +74,19 @@ InputFrame open_frame(const std::string& path, int frame, const Params& p) {
   in->close();
   if (f.spec.deep) throw Error(Exit::input, f.where() + ": deep images are not supported");
 
-  // View layer: given, or the prefix of the first channel that ends in .<depth pass>.Z or
-  // .<normal pass>.X (Blender's default is "ViewLayer").
+  // View layer: given, or the prefix of the first channel that ends in .<normal pass>.X, else
+  // .<depth pass>.Z (Blender's default is "ViewLayer"), never the back-face layer's depth
+  // (a "BackFaces" layer has Depth only and sorts first).
   f.view_layer = p.view_layer;
+  const json& back = p.passes.count("backdepth") ? p.passes.at("backdepth") : json();
+  const std::string back_channel = back.is_string() ? back.get<std::string>() : "";
   if (f.view_layer.empty()) {
-    for (const char* field : {"depth", "normal"}) {
+    for (const char* field : {"normal", "depth"}) {
       const json& v = p.passes.at(field);
       if (!v.is_string()) continue;
       const std::string tail = "." + v.get<std::string>() + "." + field_components(field)[0];
       for (const auto& ch : f.spec.channelnames)
-        if (ch.size() > tail.size() &&
+        if (ch != back_channel && ch.size() > tail.size() &&
             ch.compare(ch.size() - tail.size(), tail.size(), tail) == 0) {
           f.view_layer = ch.substr(0, ch.size() - tail.size());
           break;
@@ -93,7 +96,9 @@ InputFrame open_frame(const std::string& path, int frame, const Params& p) {
   }
   for (const auto& field : gbuffer_fields()) {
     auto it = p.passes.find(field);
-    if (it == p.passes.end()) continue;
+    // An empty pass name switches a field off (passes.backdepth="" ignores back faces).
+    if (it == p.passes.end() || (it->second.is_string() && it->second.get<std::string>().empty()))
+      continue;
     const auto cands = candidates(field, it->second, f.view_layer);
     f.wanted[field] = cands.front();
     for (const auto& names : cands) {
@@ -145,6 +150,8 @@ std::vector<std::string> fields_needed(const InputFrame& f, const Params& reques
                                           join(f.wanted.at("position")) +
                                           "; map them with passes.depth / passes.position)");
     need.push_back("normal");
+    // Per-pixel occluder thickness for the visibility bitmask (read only where it is used).
+    if (p.method == "bitmask" && f.has("backdepth")) need.push_back("backdepth");
   }
   const bool needs_albedo = p.ao_multibounce && p.wants("ao");
   if (needs_albedo && !(p.wants("irradiance") || p.wants("indirect") || p.wants("composite"))) {
@@ -231,12 +238,12 @@ GBuffer read_fields(const InputFrame& f, const std::vector<std::string>& fields,
     const std::string& field = fields[k];
     const std::vector<int>& idx = indices[k];
     std::vector<float>& v = data[k];
-    if (field == "depth") {
+    if (field == "depth" || field == "backdepth") {
       for (size_t i = 0; i < v.size(); ++i) {
-        if (!std::isfinite(v[i])) bad_value(f, idx[0], i, v[i], "non-finite depth");
-        if (v[i] < 0) bad_value(f, idx[0], i, v[i], "negative depth");
+        if (!std::isfinite(v[i])) bad_value(f, idx[0], i, v[i], "non-finite " + field);
+        if (v[i] < 0) bad_value(f, idx[0], i, v[i], "negative " + field);
       }
-      g.depth = std::move(v);
+      (field == "depth" ? g.depth : g.backdepth) = std::move(v);
     } else if (field == "alpha") {
       g.alpha = std::move(v);
     } else {
