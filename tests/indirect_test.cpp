@@ -33,6 +33,18 @@ Groove lit_groove(double gamma_deg, Vec3 L_b) {
   return s;
 }
 
+// A back-face depth that puts every back face `t` behind its front face along the ray.
+void set_backdepth(Groove& s, double t) {
+  s.g.backdepth.assign(s.g.pixels(), 1e10f);
+  for (int y = 0; y < s.g.height; ++y)
+    for (int x = 0; x < s.g.width; ++x) {
+      const size_t i = size_t(y) * s.g.width + x;
+      if (s.g.depth[i] > 1e9f) continue;
+      const double r = length(s.cam.unproject(x + 0.5, y + 0.5, s.g.depth[i]));
+      s.g.backdepth[i] = float(s.g.depth[i] * (1 + t / r));
+    }
+}
+
 Params gather_params(const std::string& method) {
   Params p;
   p.interleave = false;
@@ -101,9 +113,10 @@ TEST(NearFieldIrradiance, BackFacingNeighbourOccludesButSendsNoLight) {
 
 // gather_radius: with a small AO radius the gather still reaches all of face B through the
 // gather-only samples, and the ao layer is bit-identical to a run that gathers nothing.
-void check_gather_radius(const std::string& method) {
+void check_gather_radius(const std::string& method, bool back_faces = false) {
   const Vec3 L{1, 1, 1};
-  const Groove s = lit_groove(90, L);
+  Groove s = lit_groove(90, L);
+  if (back_faces) set_backdepth(s, 0.02);
   Params p = gather_params(method);
   p.radius = 0.1;
   p.steps = 16;
@@ -136,6 +149,9 @@ TEST(NearFieldIrradiance, HorizonGatherRadiusBeyondAoRadius) {
 }
 TEST(NearFieldIrradiance, BitmaskGatherRadiusBeyondAoRadius) {
   check_gather_radius("bitmask");
+}
+TEST(NearFieldIrradiance, BitmaskGatherRadiusBeyondAoRadiusWithBackFaces) {
+  check_gather_radius("bitmask", true);  // footprints: the last AO sample stays in its group
 }
 
 TEST(VisibilityBitmask, InfiniteThicknessReproducesHorizon) {
@@ -173,18 +189,6 @@ TEST(VisibilityBitmask, ThinOccluderLetsLightPassBehind) {
     gained += fb.ao[i] - fh.ao[i];
   }
   EXPECT_GT(gained, 100.0);
-}
-
-// A back-face depth that puts every back face `t` behind its front face along the ray.
-void set_backdepth(Groove& s, double t) {
-  s.g.backdepth.assign(s.g.pixels(), 1e10f);
-  for (int y = 0; y < s.g.height; ++y)
-    for (int x = 0; x < s.g.width; ++x) {
-      const size_t i = size_t(y) * s.g.width + x;
-      if (s.g.depth[i] > 1e9f) continue;
-      const double r = length(s.cam.unproject(x + 0.5, y + 0.5, s.g.depth[i]));
-      s.g.backdepth[i] = float(s.g.depth[i] * (1 + t / r));
-    }
 }
 
 TEST(VisibilityBitmask, BackFaceDepthGivesPerPixelThickness) {

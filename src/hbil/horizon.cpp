@@ -221,8 +221,13 @@ PixelSums march_pixel(const SampleView& view, int i, int j, const Vec3& P, const
             // to a point of another sample's plane is dominated by sub-pixel error (Blender's
             // depth is one jittered sample, P is placed at the pixel centre), so within about
             // one texel of a crease the surface between P and its first sample is missed.
-            const float lo_o = 0.5f * (o + (k == 0 ? 0.f : std::min(o_at(k - 1), o)));
-            const float hi_o = k + 1 < n_steps ? 0.5f * (o + std::max(o_at(k + 1), o)) : o;
+            const float o_prev = k == 0 ? 0.f : std::min(o_at(k - 1), o);
+            const float lo_o = 0.5f * (o + o_prev);
+            // Neighbours within the same group only: the last sample of a group reaches as
+            // far beyond itself as its predecessor is before it, never towards the
+            // gather-only samples, so ao is the same with or without them.
+            const bool last = k + 1 == (near ? c.steps : n_steps);
+            const float hi_o = last ? o + 0.5f * (o - o_prev) : 0.5f * (o + std::max(o_at(k + 1), o));
             const float plane = dot(S, n_s);
             for (float oo : {lo_o, hi_o}) {
               const Vec3 r = ray_P + dv * (sign * oo) * float(view.stride);
