@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <limits>
@@ -339,6 +340,41 @@ TEST_F(ExrFrame, BackFaceLayerIsReadForTheBitmaskOnly) {
   const InputFrame f_off = open_frame(path, 3, off);
   EXPECT_FALSE(f_off.has("backdepth"));
   EXPECT_EQ(f_off.view_layer, "ViewLayer");
+}
+
+TEST_F(ExrFrame, FresnelLayersAreReadOnlyWhenMapped) {
+  // Blender writes shader AOVs as <layer>.<name>.X (value) and .R/.G/.B/.A (colour).
+  const std::string path = file("frame_0004.exr");
+  auto channels = blender_channels("ViewLayer");
+  for (const char* c : {"ViewLayer.DiffCol.R", "ViewLayer.DiffCol.G", "ViewLayer.DiffCol.B",
+                        "ViewLayer.DiffDir.R", "ViewLayer.DiffDir.G", "ViewLayer.DiffDir.B",
+                        "ViewLayer.Metallic.X", "ViewLayer.F0.R", "ViewLayer.F0.G",
+                        "ViewLayer.F0.B"})
+    channels.push_back(c);
+  test::write_exr(path, kW, kH, channels, [&](int x, int y, int c) {
+    return channels[c] == "ViewLayer.Metallic.X" ? 0.125f * float(x % 8)
+                                                 : value_for(channels[c], x, y);
+  });
+  Params p;
+  p.outputs = {"indirect"};
+  auto needs = [&](const Params& q, const std::string& field) {
+    const auto n = fields_needed(open_frame(path, 4, q), q);
+    return std::find(n.begin(), n.end(), field) != n.end();
+  };
+  EXPECT_FALSE(needs(p, "f0"));  // default: no Fresnel weight (right for Blender's DiffCol)
+  EXPECT_FALSE(needs(p, "metallic"));
+  const Params metal = apply_set(p, "passes.metallic=Metallic");
+  EXPECT_TRUE(needs(metal, "metallic"));
+  const InputFrame f = open_frame(path, 4, metal);
+  const GBuffer g = read_fields(f, {"metallic"}, metal);
+  ASSERT_EQ(g.metallic.size(), g.pixels());
+  EXPECT_EQ(g.metallic[3], 0.375f);
+  const Params both = apply_set(metal, "passes.f0=F0");
+  EXPECT_TRUE(needs(both, "f0"));  // F0 wins over metallic
+  EXPECT_FALSE(needs(both, "metallic"));
+  Params ao_only = both;
+  ao_only.outputs = {"ao"};
+  EXPECT_FALSE(needs(ao_only, "f0"));  // only the outputs that reflect light read it
 }
 
 TEST_F(ExrFrame, CameraSolvedFromPositionWithoutSidecar) {

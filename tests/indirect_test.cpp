@@ -154,6 +154,32 @@ TEST(NearFieldIrradiance, BitmaskGatherRadiusBeyondAoRadiusWithBackFaces) {
   check_gather_radius("bitmask", true);  // footprints: the last AO sample stays in its group
 }
 
+TEST(NearFieldIrradiance, FresnelWeightOfTheReceiver) {
+  // HBIL eq. 19: ΔE = L_d (1 − F0) ∫ ..., F0 of the receiver. Default: no weight.
+  Groove s = lit_groove(90, {1, 1, 1});
+  Params p = gather_params("horizon");
+  p.slices = 8;
+  p.steps = 32;
+  const AoFrame plain = compute_ao_frame(s.g, s.cam, p);
+  s.g.f0.assign(s.g.pixels(), Vec3{0.25f, 0.5f, 1.f});
+  const AoFrame f0 = compute_ao_frame(s.g, s.cam, p);
+  s.g.f0.clear();
+  s.g.metallic.assign(s.g.pixels(), 0.5f);
+  const AoFrame half_metal = compute_ao_frame(s.g, s.cam, p);
+  int lit = 0;
+  for (size_t i = 0; i < s.g.pixels(); ++i) {
+    const Vec3 e = plain.irradiance[i];
+    if (e.x > 0.05f) ++lit;
+    EXPECT_FLOAT_EQ(f0.irradiance[i].x, 0.75f * e.x);
+    EXPECT_FLOAT_EQ(f0.irradiance[i].y, 0.5f * e.y);
+    EXPECT_EQ(f0.irradiance[i].z, 0.f);  // a perfect mirror reflects no diffuse light
+    EXPECT_FLOAT_EQ(f0.indirect[i].x, 0.75f * plain.indirect[i].x);
+    EXPECT_FLOAT_EQ(half_metal.irradiance[i].y, 0.48f * e.y);  // 0.96 (1 − 0.5)
+    EXPECT_EQ(f0.ao[i], plain.ao[i]);                           // occlusion is unchanged
+  }
+  EXPECT_GT(lit, 1000);
+}
+
 TEST(VisibilityBitmask, InfiniteThicknessReproducesHorizon) {
   const Groove s = lit_groove(60, {1, 1, 1});
   Params h = gather_params("horizon"), b = gather_params("bitmask");

@@ -3,6 +3,7 @@
 
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "hbil/error.h"
@@ -20,6 +21,19 @@ std::vector<Vec3> source_radiance(const GBuffer& g, const std::vector<Vec3>& irr
     if (!g.emit.empty()) L[i] += g.emit[i];
   }
   return L;
+}
+
+Vec3 diffuse_weight(const GBuffer& g, size_t i) {
+  if (!g.f0.empty()) {
+    const Vec3& f = g.f0[i];
+    return {1.f - std::clamp(f.x, 0.f, 1.f), 1.f - std::clamp(f.y, 0.f, 1.f),
+            1.f - std::clamp(f.z, 0.f, 1.f)};
+  }
+  if (!g.metallic.empty()) {
+    const float w = 0.96f * (1.f - std::clamp(g.metallic[i], 0.f, 1.f));
+    return {w, w, w};
+  }
+  return {1.f, 1.f, 1.f};
 }
 
 AoFrame compute_ao_frame(const GBuffer& g, const Camera& cam, const Params& p,
@@ -48,9 +62,16 @@ AoFrame compute_ao_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& c
   // emission). Occlusion is the same every time; the last search's is kept.
   HorizonImage h;
   std::vector<Vec3> irradiance;
+  const bool fresnel = !g.f0.empty() || !g.metallic.empty();
   for (int bounce = 0; bounce < (gather ? p.bounces : 1); ++bounce) {
     const std::vector<Vec3> L = gather ? source_radiance(g, irradiance) : std::vector<Vec3>{};
     h = search(gather ? &L : nullptr);
+    if (fresnel)
+      for (size_t i = 0; i < h.irradiance.size(); ++i) {
+        const Vec3 w = diffuse_weight(g, i);
+        Vec3& e = h.irradiance[i];
+        e = Vec3{w.x * e.x, w.y * e.y, w.z * e.z};
+      }
     irradiance = h.irradiance;
   }
 
@@ -109,7 +130,9 @@ AoFrame compute_ao_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& c
       if (multibounce) out.ao_rgb[i] = multibounce_ao(out.ao[i], g.diffcol[i]);
       if (far) {
         // §2.2.4: SH irradiance limited to the bent cone, t = cos α; stored as E/π.
-        out.farfield[i] = cone_irradiance(*environment, out.bent[i], out.cone_cos[i]) / float(M_PI);
+        const Vec3 w = diffuse_weight(g, i),
+                   e = cone_irradiance(*environment, out.bent[i], out.cone_cos[i]) / float(M_PI);
+        out.farfield[i] = Vec3{w.x * e.x, w.y * e.y, w.z * e.z};
         if (composite) {
           const Vec3 a = g.diffcol[i], f = out.farfield[i];
           out.composite[4 * i] += a.x * f.x;

@@ -18,7 +18,7 @@ struct AoFrame {
   std::vector<Vec3> bent;       // unit bent normal, world space (eq. 4-6)
   std::vector<float> cone_cos;  // cos of the bent cone's half-angle, 1 − Ω/2π (eq. 12)
   // With the outputs irradiance or indirect (empty otherwise):
-  std::vector<Vec3> irradiance;  // E_near / π: the units of Blender's DiffInd
+  std::vector<Vec3> irradiance;  // E_near / π: the units of Blender's DiffInd (× diffuse_weight)
   std::vector<Vec3> indirect;    // DiffCol × E_near / π: comparable to DiffCol × DiffInd
   std::vector<Vec3> ao_rgb;      // ao_multibounce: multi-bounce AO per channel
   std::vector<Vec3> farfield;    // far-field irradiance / π in the bent cone (§2.2.4)
@@ -29,6 +29,10 @@ struct AoFrame {
 // DiffCol × (DiffDir + irradiance) + Emit, with irradiance = E/π of the previous bounce
 // (empty: none yet).
 std::vector<Vec3> source_radiance(const GBuffer& g, const std::vector<Vec3>& irradiance);
+
+// The receiver's weight on diffusely reflected light, HBIL eq. 19: 1 − F0 per channel from
+// g.f0, else 0.96 (1 − metallic) (F0 = 0.04 for dielectrics, ~1 for metals), else 1.
+Vec3 diffuse_weight(const GBuffer& g, size_t i);
 
 // Outputs "auto" (Params::outputs) resolve to ao and bentcone, plus irradiance, indirect and
 // composite when `g` holds DiffCol and DiffDir.

@@ -14,6 +14,7 @@ std::vector<Vec3>* GBuffer::rgb(const std::string& field) {
   if (field == "diffcol") return &diffcol;
   if (field == "diffdir") return &diffdir;
   if (field == "emit") return &emit;
+  if (field == "f0") return &f0;
   if (field == "env") return &env;
   if (field == "glosscol") return &glosscol;
   if (field == "glossdir") return &glossdir;

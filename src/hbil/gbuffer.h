@@ -22,6 +22,8 @@ struct GBuffer {
   std::vector<Vec3> diffcol;   // diffuse albedo (Blender DiffCol)
   std::vector<Vec3> diffdir;   // direct diffuse irradiance / π (Blender DiffDir)
   std::vector<Vec3> emit;      // emitted radiance (Blender Emit)
+  std::vector<Vec3> f0;        // reflectance at normal incidence (optional, HBIL eq. 19)
+  std::vector<float> metallic;  // metalness in [0, 1] (optional, used when f0 is absent)
   // Passed through into the composite when present (Blender names: Env, GlossCol, ...).
   std::vector<Vec3> env, glosscol, glossdir, glossind, transcol, transdir, transind;
 

@@ -16,7 +16,8 @@ std::map<std::string, json> Params::default_passes() {
           {"alpha", "Combined.A"},  {"diffcol", "DiffCol"},   {"diffdir", "DiffDir"},
           {"emit", "Emit"},         {"env", "Env"},           {"glosscol", "GlossCol"},
           {"glossdir", "GlossDir"}, {"glossind", "GlossInd"}, {"transcol", "TransCol"},
-          {"transdir", "TransDir"}, {"transind", "TransInd"}, {"backdepth", "BackFaces.Depth.Z"}};
+          {"transdir", "TransDir"}, {"transind", "TransInd"}, {"backdepth", "BackFaces.Depth.Z"},
+          {"f0", ""},               {"metallic", ""}};
 }
 
 bool Params::wants(const std::string& output) const {
@@ -67,7 +68,7 @@ const std::vector<ParamInfo>& params_table() {
 const std::vector<std::string>& gbuffer_fields() {
   static const std::vector<std::string> f = {
       "depth", "normal",   "position", "alpha",    "diffcol",  "diffdir",  "emit",
-      "env",   "glosscol", "glossdir", "glossind", "transcol", "transdir", "transind", "backdepth"};
+      "env",   "glosscol", "glossdir", "glossind", "transcol", "transdir", "transind", "backdepth", "f0", "metallic"};
   return f;
 }
 

@@ -15,10 +15,11 @@ using nlohmann::json;
 
 const std::vector<std::string>& field_components(const std::string& field) {
   static const std::vector<std::string> depth = {"Z"}, xyz = {"X", "Y", "Z"}, alpha = {"A"},
-                                        rgb = {"R", "G", "B"};
+                                        rgb = {"R", "G", "B"}, value = {"X"};
   if (field == "depth" || field == "backdepth") return depth;
   if (field == "normal" || field == "position") return xyz;
   if (field == "alpha") return alpha;
+  if (field == "metallic") return value;  // a Blender value AOV: <layer>.<name>.X
   return rgb;  // colour passes: diffcol, diffdir, emit, env, gloss*, trans*
 }
 
@@ -173,6 +174,15 @@ std::vector<std::string> fields_needed(const InputFrame& f, const Params& reques
     need.insert(need.end(), {"diffcol", "diffdir"});
     if (f.has("emit")) need.push_back("emit");
   }
+  // HBIL eq. 19: the receiver's (1 − F0) on the light it reflects diffusely, from F0 or else
+  // from metallic, when a preset maps one.
+  if (p.wants("irradiance") || p.wants("indirect") || p.wants("composite") ||
+      p.wants("farfield")) {
+    if (f.has("f0"))
+      need.push_back("f0");
+    else if (f.has("metallic"))
+      need.push_back("metallic");
+  }
   if (p.wants("composite"))  // passed through when present
     for (const char* field :
          {"env", "glosscol", "glossdir", "glossind", "transcol", "transdir", "transind"})
@@ -246,6 +256,10 @@ GBuffer read_fields(const InputFrame& f, const std::vector<std::string>& fields,
       (field == "depth" ? g.depth : g.backdepth) = std::move(v);
     } else if (field == "alpha") {
       g.alpha = std::move(v);
+    } else if (field == "metallic") {
+      for (size_t i = 0; i < v.size(); ++i)
+        if (!std::isfinite(v[i])) bad_value(f, idx[0], i, v[i], "non-finite metallic");
+      g.metallic = std::move(v);
     } else {
       std::vector<Vec3>& dst = *g.rgb(field);
       dst.resize(g.pixels());
