@@ -270,6 +270,20 @@ TEST_F(Cli, NoDisplayWritesOnlyTheExr) {
                  Exit::usage, {"--no-display"});
 }
 
+TEST_F(Cli, InputSpaceFromThePresetAndTheOption) {
+  // The preset's input_space is the display transform's source; --input-space overrides it.
+  auto source = [&](const std::string& extra) {
+    const RunResult r = hbil(run_args(test::kRoomPoles + "/frame_####.exr",
+                                      path("out/out_####.exr"), "--frames 1 " + extra));
+    EXPECT_EQ(r.code, 0) << r.err;
+    return r.err;
+  };
+  EXPECT_TRUE(contains(source(""), "Linear Rec.709 (sRGB) -> display sRGB"));
+  EXPECT_TRUE(contains(source("--set input_space=ACEScg"), "ACEScg -> display sRGB"));
+  EXPECT_TRUE(contains(source("--set input_space=ACEScg --input-space ACEScct"),
+                       "ACEScct -> display sRGB"));
+}
+
 // --- Failures: exit code, a message naming the file and frame, nothing written --------
 
 TEST_F(Cli, MissingPassFailsWithoutOutput) {

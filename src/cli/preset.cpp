@@ -31,8 +31,15 @@ void add_preset(CLI::App& app) {
           std::cout << "  [" << i.min << ", " << i.max << "]";
         std::cout << "  (" << i.unit << ")\n    " << i.help << "\n";
       }
+      std::cout << "method = " << d["method"].dump()
+                << "\n    occlusion model: \"horizon\" (HBIL) or \"bitmask\" (visibility bitmask)\n";
+      std::cout << "environment = " << d["environment"].dump()
+                << "\n    far field: \"\" (off), an equirectangular EXR, or \"rgb:r,g,b\"\n";
       std::cout << "view_layer = " << d["view_layer"].dump()
                 << "\n    view layer of the channels; \"\" detects it\n";
+      std::cout << "input_space = " << d["input_space"].dump()
+                << "\n    OpenColorIO colour space of the colour passes; \"\" = the config's "
+                   "scene_linear role (--input-space overrides)\n";
       std::cout << "passes = " << d["passes"].dump()
                 << "\n    G-buffer field -> pass name, or an array of channel names\n";
       std::cout << "outputs = " << d["outputs"].dump()

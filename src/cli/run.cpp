@@ -161,7 +161,9 @@ void run(const RunOptions& o) {
                   "--display-layer " + display_layer +
                       ": must be one of the computed colour layers (ao, irradiance, indirect, "
                       "farfield, composite) named in outputs");
-    display.emplace(io::DisplaySettings{o.ocio_config, o.input_space, o.display, o.view},
+    display.emplace(io::DisplaySettings{o.ocio_config,
+                                        o.input_space.empty() ? p.input_space : o.input_space,
+                                        o.display, o.view},
                     shipped_ocio_config());
     display_pattern.emplace(display_out);
     if (job.frames.size() > 1 && !display_pattern->is_sequence())
@@ -307,7 +309,7 @@ void add_run(CLI::App& app) {
   cmd->add_option("--view", o->view,
                   "OCIO view (default: the display's default, Standard in the shipped one)");
   cmd->add_option("--input-space", o->input_space,
-                  "OCIO colour space of the pixels (default: the scene_linear role)");
+                  "OCIO colour space of the pixels (default: the preset's input_space, else the scene_linear role)");
   cmd->add_option("--ocio-config", o->ocio_config,
                   "OCIO config file; default $OCIO, else the config shipped with hbil "
                   "(presets/ocio/hbil.ocio)");

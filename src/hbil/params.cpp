@@ -113,6 +113,7 @@ json to_json(const Params& p) {
   j["method"] = p.method;
   j["environment"] = p.environment;
   j["view_layer"] = p.view_layer;
+  j["input_space"] = p.input_space;
   j["passes"] = p.passes;
   j["outputs"] = p.outputs;
   return j;
@@ -174,6 +175,10 @@ Params params_from_json(const json& j, const std::string& where, Params p) {
     } else if (key == "view_layer") {
       if (!v.is_string()) fail(where, "key 'view_layer' must be a string, got " + v.dump());
       p.view_layer = v.get<std::string>();
+    } else if (key == "input_space") {
+      if (!v.is_string())
+        fail(where, "key 'input_space' must be an OpenColorIO colour space, got " + v.dump());
+      p.input_space = v.get<std::string>();
     } else if (key == "passes") {
       if (!v.is_object()) fail(where, "key 'passes' must be an object, got " + v.dump());
       for (auto pit = v.begin(); pit != v.end(); ++pit) {
@@ -201,7 +206,8 @@ Params params_from_json(const json& j, const std::string& where, Params p) {
     } else {
       std::vector<std::string> keys;
       for (const auto& i : params_table()) keys.push_back(i.key);
-      keys.insert(keys.end(), {"method", "environment", "view_layer", "passes", "outputs"});
+      keys.insert(keys.end(),
+                  {"method", "environment", "view_layer", "input_space", "passes", "outputs"});
       fail(where, "unknown key '" + key + "' (known: " + allowed_list(keys) + ")");
     }
   }

@@ -42,6 +42,7 @@ struct Params {
   // --- Input ---
   double background_depth = 1e9;  // depth >= this (Blender: 1e10) is background
   std::string view_layer;         // "" = detect (the layer holding Depth or Normal)
+  std::string input_space;        // OCIO colour space of the colour passes; "" = scene_linear
   // G-buffer field -> channels. A string names a pass ("Normal" -> <layer>.Normal.X/Y/Z),
   // or a full channel prefix containing a dot; an array lists exact channel names.
   std::map<std::string, nlohmann::json> passes = default_passes();
