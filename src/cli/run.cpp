@@ -14,6 +14,7 @@
 #include "cli/commands.h"
 #include "hbil/ao_frame.h"
 #include "hbil/error.h"
+#include "hbil/temporal.h"
 #include "io/display.h"
 #include "io/environment.h"
 #include "io/exr_frame.h"
@@ -28,19 +29,41 @@ namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
 struct RunOptions {
-  std::string input, output, frames;
-  int threads = 0;
+  std::string input, output, frames, cut_frames;
+  int threads = 0, preroll = 0;
   bool quiet = false, verbose = false, no_display = false;
   ParamOptions params;
   // Display images through OpenColorIO.
   std::string display_out, display_layer, ocio_config, input_space, display, view;
 };
 
-// The frames to process and their input and output paths.
+// The frames to write and their input and output paths; the pre-roll frames computed
+// before them (temporal chain) and the frames given as cuts.
 struct Job {
   std::vector<int> frames;
   io::FramePattern in, out;
+  std::vector<int> preroll;
+  std::set<int> cuts;
 };
+
+// "12,40" -> {12, 40}.
+std::set<int> parse_cut_frames(const std::string& text) {
+  std::set<int> cuts;
+  std::stringstream s(text);
+  std::string item;
+  while (std::getline(s, item, ',')) {
+    try {
+      size_t used = 0;
+      const int f = std::stoi(item, &used);
+      if (used != item.size() || f < 0) throw std::invalid_argument(item);
+      cuts.insert(f);
+    } catch (const std::exception&) {
+      throw Error(Exit::usage,
+                  "--cut-frames: \"" + item + "\" is not a frame number (expected e.g. 12,40)");
+    }
+  }
+  return cuts;
+}
 
 Job plan(const RunOptions& o) {
   Job job{{}, io::FramePattern(o.input), io::FramePattern(o.output)};
@@ -66,6 +89,16 @@ Job plan(const RunOptions& o) {
     if (fs::equivalent(job.in.path(f), job.out.path(f), ec))
       throw Error(Exit::usage, "-o " + job.out.path(f) + " would overwrite its own input");
   }
+  if (o.preroll > 0) {
+    if (!job.in.is_sequence())
+      throw Error(Exit::usage, "--preroll needs an input frame pattern, got the single file " +
+                                   o.input);
+    // The frames of the sequence that exist in [first − P, first − 1].
+    const int first = job.frames.front();
+    for (int f : job.in.existing_frames())
+      if (f >= first - o.preroll && f < first) job.preroll.push_back(f);
+  }
+  if (!o.cut_frames.empty()) job.cuts = parse_cut_frames(o.cut_frames);
   return job;
 }
 
@@ -207,9 +240,16 @@ void run(const RunOptions& o) {
   int width = 0, height = 0;
   std::string first_path;
   try {
-    for (size_t k = 0; k < job.frames.size(); ++k) {
+    // Pre-roll frames first (computed, not written), then the frames to write.
+    std::vector<int> order = job.preroll;
+    order.insert(order.end(), job.frames.begin(), job.frames.end());
+    const bool temporal = p.temporal && order.size() > 1;
+    std::optional<TemporalChain> chain;
+    if (temporal) chain.emplace(p);
+    for (size_t k = 0; k < order.size(); ++k) {
       const auto t0 = Clock::now();
-      const int frame = job.frames[k];
+      const int frame = order[k];
+      const bool preroll = k < job.preroll.size();
       const io::InputFrame in = io::open_frame(job.in.path(frame), frame, p);
       if (k == 0) {
         width = in.spec.width;
@@ -225,8 +265,27 @@ void run(const RunOptions& o) {
       const auto t_read = Clock::now();
       const Camera cam = io::find_camera(in, g, p);
       const auto t_camera = Clock::now();
-      const AoFrame result = compute_ao_frame(g, cam, p, environment ? &*environment : nullptr);
+      TemporalReport rep;
+      const AoFrame result =
+          chain ? chain->process(g, cam, frame, job.cuts.count(frame) > 0,
+                                 environment ? &*environment : nullptr, &rep)
+                : compute_ao_frame(g, cam, p, environment ? &*environment : nullptr);
       const auto t_compute = Clock::now();
+      if (rep.cut) {
+        const std::string line =
+            "hbil: frame " + std::to_string(frame) + ": cut (" + rep.cut_reason + "), history dropped";
+        if (!o.quiet) std::cerr << (tty ? "\r\033[K" : "") << line << "\n";
+      }
+      if (preroll) {
+        if (!o.quiet) {
+          char line[256];
+          std::snprintf(line, sizeof line, "hbil: frame %d (pre-roll %zu/%zu) %.3f s", frame, k + 1,
+                        job.preroll.size(),
+                        std::chrono::duration<double>(Clock::now() - t0).count());
+          std::cerr << (tty ? "\r\033[K" : "") << line << (tty ? "" : "\n") << std::flush;
+        }
+        continue;
+      }
       const std::string out_path = job.out.path(frame);
       done.emplace_back(io::write_temporary(out_path, io::make_output(result, p), in.spec, p, cam),
                         out_path);
@@ -254,8 +313,16 @@ void run(const RunOptions& o) {
       if (!o.quiet) {
         const double s = std::chrono::duration<double>(Clock::now() - t0).count();
         char line[512];
-        std::snprintf(line, sizeof line, "hbil: frame %d (%zu/%zu) %.3f s  camera: %s", frame,
-                      k + 1, job.frames.size(), s, cam.source.c_str());
+        std::string history;
+        if (chain && !rep.first && !rep.cut) {
+          char h[96];
+          std::snprintf(h, sizeof h, "  history %.0f %% (%s)", 100 * rep.history,
+                        rep.reprojection.c_str());
+          history = h;
+        }
+        std::snprintf(line, sizeof line, "hbil: frame %d (%zu/%zu) %.3f s  camera: %s%s", frame,
+                      k + 1 - job.preroll.size(), job.frames.size(), s, cam.source.c_str(),
+                      history.c_str());
         std::cerr << (tty ? "\r\033[K" : "") << line << (tty ? "" : "\n") << std::flush;
       }
     }
@@ -268,8 +335,11 @@ void run(const RunOptions& o) {
   const double total = std::chrono::duration<double>(Clock::now() - start).count();
   if (!o.quiet) {
     char line[256];
-    std::snprintf(line, sizeof line, "hbil: %zu frames, %.3f s per frame, %.2f s in all",
-                  job.frames.size(), total / double(job.frames.size()), total);
+    const size_t computed = job.frames.size() + job.preroll.size();
+    const std::string pre =
+        job.preroll.empty() ? "" : " (+" + std::to_string(job.preroll.size()) + " pre-roll)";
+    std::snprintf(line, sizeof line, "hbil: %zu frames%s, %.3f s per frame, %.2f s in all",
+                  job.frames.size(), pre.c_str(), total / double(computed), total);
     std::cerr << (tty ? "\n" : "") << line << "\n";
   }
 }
@@ -288,6 +358,13 @@ void add_run(CLI::App& app) {
       ->required();
   cmd->add_option("--frames", o->frames,
                   "frame range A-B, or one frame N (default: every frame found)");
+  cmd->add_option("--preroll", o->preroll,
+                  "temporal chain: compute the P frames before the first one first (not written), "
+                  "so that a farm chunk starts with history")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--cut-frames", o->cut_frames,
+                  "temporal chain: frames that start a new shot (history dropped), e.g. 12,40; "
+                  "cuts are also detected");
   cmd->add_option("--threads", o->threads,
                   "worker threads (0 = all cores); results are identical for any count")
       ->default_val(0)

@@ -41,17 +41,28 @@ AoFrame compute_ao_frame(const GBuffer& g, const Camera& cam, const Params& p,
   return compute_ao_frame(make_view_gbuffer(g, cam, p), g, cam, p, environment);
 }
 
-AoFrame compute_ao_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& cam,
-                         const Params& requested, const SH9* environment) {
-  // "auto": the colour outputs when the G-buffer holds what they gather from.
-  const Params p = resolve_outputs(requested, [&g](const std::string& o) {
+Params resolve_frame_outputs(const GBuffer& g, const Params& requested) {
+  return resolve_outputs(requested, [&g](const std::string& o) {
     return o == "ao" || o == "bentcone" || (!g.diffcol.empty() && !g.diffdir.empty());
   });
-  const std::vector<Vec3>& world_normal = g.normal;
-  const HorizonConfig c = make_horizon_config(p, cam);
-  const bool gather = p.wants("irradiance") || p.wants("indirect") || p.wants("composite");
-  const bool far = p.wants("farfield") || (p.wants("composite") && environment);
-  if (far && !environment) throw Error(Exit::preset, "output farfield needs an environment");
+}
+
+bool gathers(const Params& p) {
+  return p.wants("irradiance") || p.wants("indirect") || p.wants("composite");
+}
+
+AoFrame compute_ao_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& cam,
+                         const Params& requested, const SH9* environment) {
+  const Params p = resolve_frame_outputs(g, requested);
+  return assemble_frame(v, g, cam, p, search_frame(v, g, cam, p, FrameInputs{}), environment);
+}
+
+HorizonImage search_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& cam,
+                          const Params& p, const FrameInputs& in) {
+  HorizonConfig c = make_horizon_config(p, cam);
+  if (in.rotate)
+    frame_rotation(in.frame, p.interleave ? 16 * p.slices : p.slices, c.rotation, c.jitter_shift);
+  const bool gather = gathers(p);
   auto search = [&](const std::vector<Vec3>* radiance) {
     HorizonImage h = p.interleave ? horizon_interleaved(v, c, p.slices, radiance)
                                   : horizon_full(v, c, p.slices, radiance);
@@ -59,9 +70,11 @@ AoFrame compute_ao_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& c
     return h;
   };
   // Bounce k gathers the outgoing radiance of bounce k − 1 (bounce 0: direct light and
-  // emission). Occlusion is the same every time; the last search's is kept.
+  // emission, plus the previous frame's indirect light when the temporal chain feeds it
+  // back). Occlusion is the same every time; the last search's is kept.
   HorizonImage h;
   std::vector<Vec3> irradiance;
+  if (gather && in.feedback) irradiance = *in.feedback;
   const bool fresnel = !g.f0.empty() || !g.metallic.empty();
   for (int bounce = 0; bounce < (gather ? p.bounces : 1); ++bounce) {
     const std::vector<Vec3> L = gather ? source_radiance(g, irradiance) : std::vector<Vec3>{};
@@ -74,7 +87,15 @@ AoFrame compute_ao_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& c
       }
     irradiance = h.irradiance;
   }
+  return h;
+}
 
+AoFrame assemble_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& cam,
+                       const Params& p, const HorizonImage& h, const SH9* environment) {
+  const std::vector<Vec3>& world_normal = g.normal;
+  const bool gather = gathers(p);
+  const bool far = p.wants("farfield") || (p.wants("composite") && environment);
+  if (far && !environment) throw Error(Exit::preset, "output farfield needs an environment");
   AoFrame out;
   out.width = v.width;
   out.height = v.height;

@@ -8,6 +8,7 @@
 #include "hbil/camera.h"
 #include "hbil/farfield.h"
 #include "hbil/gbuffer.h"
+#include "hbil/interleave.h"
 #include "hbil/params.h"
 
 namespace hbil {
@@ -41,6 +42,26 @@ Vec3 diffuse_weight(const GBuffer& g, size_t i);
 // `environment` (SH of the far field, world space) is needed by the farfield output.
 AoFrame compute_ao_frame(const GBuffer& g, const Camera& cam, const Params& p,
                          const SH9* environment = nullptr);
+
+// The two halves of compute_ao_frame, for the temporal chain (temporal.h), which blends the
+// search's result with its history in between. `p` has its outputs resolved
+// (resolve_frame_outputs).
+struct FrameInputs {
+  bool rotate = false;  // turn the slices and shift the step jitter by the frame number
+  int frame = 0;
+  // E/π per pixel added to DiffDir in the source radiance of the first bounce (the previous
+  // frame's indirect light, reprojected), or null.
+  const std::vector<Vec3>* feedback = nullptr;
+};
+Params resolve_frame_outputs(const GBuffer& g, const Params& requested);
+// Whether the outputs need the irradiance gather (irradiance, indirect, composite).
+bool gathers(const Params& p);
+HorizonImage search_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& cam,
+                          const Params& p, const FrameInputs& in);
+// ao, cone and bent from h.ao, h.vis, h.bent (view space), and the colour outputs from
+// h.irradiance.
+AoFrame assemble_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& cam,
+                       const Params& p, const HorizonImage& h, const SH9* environment);
 
 // The same from an already prepared view-space G-buffer (used by tests and benchmarks).
 // `g` supplies the world normals and, for irradiance, the colour fields.

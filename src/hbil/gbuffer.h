@@ -24,6 +24,9 @@ struct GBuffer {
   std::vector<Vec3> emit;      // emitted radiance (Blender Emit)
   std::vector<Vec3> f0;        // reflectance at normal incidence (optional, HBIL eq. 19)
   std::vector<float> metallic;  // metalness in [0, 1] (optional, used when f0 is absent)
+  // Raster offset (du, dv) per pixel from its centre to where its surface was in the
+  // previous frame (from Blender's Vector pass), 2 floats per pixel.
+  std::vector<float> motion;
   // Passed through into the composite when present (Blender names: Env, GlossCol, ...).
   std::vector<Vec3> env, glosscol, glossdir, glossind, transcol, transdir, transind;
 

@@ -41,6 +41,16 @@ HorizonConfig make_horizon_config(const Params& p, const Camera& cam) {
   return c;
 }
 
+void frame_rotation(int frame, int directions, float& rotation, float& jitter_shift) {
+  // Radical inverse in base 2 of the frame number (bit-reversed), in [0, 1).
+  unsigned n = unsigned(frame), r = 0;
+  for (int b = 0; b < 32; ++b, n >>= 1) r = (r << 1) | (n & 1u);
+  const double vdc = double(r) / 4294967296.0;
+  rotation = float(vdc * std::numbers::pi / double(directions));
+  const double g = double(unsigned(frame)) * 0.6180339887498949;
+  jitter_shift = float(g - std::floor(g));
+}
+
 std::vector<float> step_fractions(const HorizonConfig& c, float jitter) {
   std::vector<float> f(c.steps + c.gather_steps);
   for (int k = 0; k < c.steps; ++k)

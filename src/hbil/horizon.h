@@ -58,7 +58,14 @@ struct HorizonConfig {
   float thickness = 0.4f, thickness_growth = 0;  // bitmask occluder thickness: t + growth * z
   float gather_radius = 1;  // world units, >= radius: how far the irradiance gather reaches
   int gather_steps = 0;     // samples per side between radius and gather_radius (gather only)
+  // Temporal chain (HBIL §3.3 with accumulation): every slice angle turns by `rotation`
+  // (radians) and every step jitter shifts by `jitter_shift` (mod 1), both from the frame.
+  float rotation = 0, jitter_shift = 0;
 };
+// The rotation and jitter shift of frame `frame` for `directions` evenly spaced slice
+// directions per block: a van der Corput fraction of the spacing π/directions, and the
+// golden-ratio sequence, so that successive frames fill in between each other's directions.
+void frame_rotation(int frame, int directions, float& rotation, float& jitter_shift);
 HorizonConfig make_horizon_config(const Params& p, const Camera& cam);
 
 // The integrals of one slice between θ0 <= θ1 for a normal whose projection onto the slice

@@ -20,6 +20,12 @@ void store(HorizonImage& out, size_t idx, const PixelSums& s, int n_slices) {
   if (!out.irradiance.empty()) out.irradiance[idx] = s.irradiance / float(n_slices);
 }
 
+// A jitter in (0, 1) shifted by s, mod 1 (s = 0: unchanged).
+float shifted(float jitter, float s) {
+  const float j = jitter + s;
+  return j >= 1.f ? j - 1.f : j;
+}
+
 HorizonImage blank(const ViewGBuffer& g, bool gather) {
   HorizonImage out;
   out.width = g.width;
@@ -47,8 +53,8 @@ HorizonImage horizon_full(const ViewGBuffer& g, const HorizonConfig& c, int slic
                           const std::vector<Vec3>* radiance) {
   HorizonImage out = blank(g, radiance != nullptr);
   std::vector<float> phi(slices);
-  for (int s = 0; s < slices; ++s) phi[s] = kPi * (float(s) + 0.5f) / float(slices);
-  const std::vector<float> fraction = step_fractions(c, 0.5f);
+  for (int s = 0; s < slices; ++s) phi[s] = kPi * (float(s) + 0.5f) / float(slices) + c.rotation;
+  const std::vector<float> fraction = step_fractions(c, shifted(0.5f, c.jitter_shift));
   const SampleView view{g.position.data(),
                         g.normal.data(),
                         g.width,
@@ -92,7 +98,8 @@ HorizonImage horizon_interleaved(const ViewGBuffer& g, const HorizonConfig& c, i
     s.h = (g.height - s.oy + 3) / 4;
     s.phi.resize(slices);
     interleaved_angles(phase, slices, s.phi.data());
-    s.fraction = step_fractions(c, interleaved_jitter(phase));
+    for (float& a : s.phi) a += c.rotation;
+    s.fraction = step_fractions(c, shifted(interleaved_jitter(phase), c.jitter_shift));
   }
   // Deinterleave (split depth and normals into the 16 quarter-resolution buffers).
   tbb::parallel_for(0, 16, [&](int phase) {

@@ -17,7 +17,8 @@ std::map<std::string, json> Params::default_passes() {
           {"emit", "Emit"},         {"env", "Env"},           {"glosscol", "GlossCol"},
           {"glossdir", "GlossDir"}, {"glossind", "GlossInd"}, {"transcol", "TransCol"},
           {"transdir", "TransDir"}, {"transind", "TransInd"}, {"backdepth", "BackFaces.Depth.Z"},
-          {"f0", ""},               {"metallic", ""}};
+          {"f0", ""},               {"metallic", ""},
+          {"vector", "Vector"}};
 }
 
 bool Params::wants(const std::string& output) const {
@@ -59,6 +60,34 @@ const std::vector<ParamInfo>& params_table() {
       {"ao_multibounce", &Params::ao_multibounce, 0, 1, "bool",
        "write ao as ao.R/G/B with the multi-bounce approximation of the improved-AO notes "
        "(eq. 12, per channel with DiffCol as albedo) instead of ao.Y; needs DiffCol"},
+      {"temporal", &Params::temporal, 0, 1, "bool",
+       "temporal chain over the frames of a run: reprojection of the previous frame, radiance "
+       "feedback, accumulation of irradiance, ao and bentcone, slices rotating with the frame"},
+      {"feedback", &Params::feedback, 0, 1, "bool",
+       "temporal: the gather's source radiance includes the previous frame's indirect light "
+       "(reprojected), so light bounces once more every frame (HBIL eq. 17)"},
+      {"push_pull", &Params::push_pull, 0, 1, "bool",
+       "temporal: fill disocclusions of the reprojected irradiance from their surroundings "
+       "through a depth-aware mip pyramid (push/pull)"},
+      {"history_weight", &Params::history_weight, 0, 0.99, "fraction",
+       "temporal: weight of the accumulated history against the current frame once its "
+       "history is long enough (exponential blend)"},
+      {"history_max", &Params::history_max, 1, 1024, "frames",
+       "temporal: a pixel with n frames of history blends the current one with weight "
+       "max(1/n, 1 - history_weight), n capped here"},
+      {"history_depth_tolerance", &Params::history_depth_tolerance, 0, 1, "relative",
+       "temporal: history whose reprojected depth differs by more than this fraction is "
+       "rejected"},
+      {"history_normal_cos", &Params::history_normal_cos, -1, 1, "cosine",
+       "temporal: history whose normal is farther than this from the pixel's is rejected"},
+      {"cut_rejected", &Params::cut_rejected, 0, 1, "fraction",
+       "temporal: a frame that rejects the history of more than this fraction of its pixels "
+       "is a camera cut (history dropped)"},
+      {"cut_camera_jump", &Params::cut_camera_jump, 0, 1e6, "fraction of median depth",
+       "temporal: a camera that moves farther than this times the frame's median depth is a "
+       "cut"},
+      {"cut_camera_angle", &Params::cut_camera_angle, 0, 180, "degrees",
+       "temporal: a camera that turns by more than this is a cut"},
       {"background_depth", &Params::background_depth, 1e-6, 1e30, "world units",
        "depth at or beyond which a pixel is background (Blender writes 1e10)"},
   };
@@ -68,7 +97,7 @@ const std::vector<ParamInfo>& params_table() {
 const std::vector<std::string>& gbuffer_fields() {
   static const std::vector<std::string> f = {
       "depth", "normal",   "position", "alpha",    "diffcol",  "diffdir",  "emit",
-      "env",   "glosscol", "glossdir", "glossind", "transcol", "transdir", "transind", "backdepth", "f0", "metallic"};
+      "env",   "glosscol", "glossdir", "glossind", "transcol", "transdir", "transind", "backdepth", "f0", "metallic", "vector"};
   return f;
 }
 
@@ -111,6 +140,7 @@ json to_json(const Params& p) {
     std::visit([&](auto m) { j[info.key] = p.*m; }, info.member);
   }
   j["method"] = p.method;
+  j["reprojection"] = p.reprojection;
   j["environment"] = p.environment;
   j["view_layer"] = p.view_layer;
   j["input_space"] = p.input_space;
@@ -168,6 +198,11 @@ Params params_from_json(const json& j, const std::string& where, Params p) {
       if (!v.is_string())
         fail(where, "key 'method' must be \"horizon\" or \"bitmask\", got " + v.dump());
       p.method = v.get<std::string>();
+    } else if (key == "reprojection") {
+      if (!v.is_string())
+        fail(where, "key 'reprojection' must be \"auto\", \"scatter\" or \"vector\", got " +
+                        v.dump());
+      p.reprojection = v.get<std::string>();
     } else if (key == "environment") {
       if (!v.is_string())
         fail(where, "key 'environment' must be a file name or \"rgb:r,g,b\", got " + v.dump());
@@ -207,7 +242,8 @@ Params params_from_json(const json& j, const std::string& where, Params p) {
       std::vector<std::string> keys;
       for (const auto& i : params_table()) keys.push_back(i.key);
       keys.insert(keys.end(),
-                  {"method", "environment", "view_layer", "input_space", "passes", "outputs"});
+                  {"method", "reprojection", "environment", "view_layer", "input_space", "passes",
+                   "outputs"});
       fail(where, "unknown key '" + key + "' (known: " + allowed_list(keys) + ")");
     }
   }
@@ -234,6 +270,9 @@ void validate(const Params& p, const std::string& where) {
   }
   if (p.method != "horizon" && p.method != "bitmask")
     fail(where, "key 'method' = \"" + p.method + "\" is not one of \"horizon\", \"bitmask\"");
+  if (p.reprojection != "auto" && p.reprojection != "scatter" && p.reprojection != "vector")
+    fail(where, "key 'reprojection' = \"" + p.reprojection +
+                    "\" is not one of \"auto\", \"scatter\", \"vector\"");
   if (p.outputs.empty()) fail(where, "key 'outputs' is empty: nothing to compute");
   if (p.wants("farfield") && p.environment.empty())
     fail(where,

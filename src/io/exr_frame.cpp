@@ -15,11 +15,13 @@ using nlohmann::json;
 
 const std::vector<std::string>& field_components(const std::string& field) {
   static const std::vector<std::string> depth = {"Z"}, xyz = {"X", "Y", "Z"}, alpha = {"A"},
-                                        rgb = {"R", "G", "B"}, value = {"X"};
+                                        rgb = {"R", "G", "B"}, value = {"X"},
+                                        motion = {"X", "Y"};
   if (field == "depth" || field == "backdepth") return depth;
   if (field == "normal" || field == "position") return xyz;
   if (field == "alpha") return alpha;
   if (field == "metallic") return value;  // a Blender value AOV: <layer>.<name>.X
+  if (field == "vector") return motion;   // Blender's Vector: X, Y towards the previous frame
   return rgb;  // colour passes: diffcol, diffdir, emit, env, gloss*, trans*
 }
 
@@ -187,6 +189,15 @@ std::vector<std::string> fields_needed(const InputFrame& f, const Params& reques
     for (const char* field :
          {"env", "glosscol", "glossdir", "glossind", "transcol", "transdir", "transind"})
       if (f.has(field)) need.push_back(field);
+  // Motion vectors for the temporal chain's gather reprojection.
+  if (geometry && p.temporal && p.reprojection != "scatter") {
+    if (f.has("vector"))
+      need.push_back("vector");
+    else if (p.reprojection == "vector")
+      throw Error(Exit::missing_pass, f.where() + ": missing pass: vector (looked for channels " +
+                                          join(f.wanted.at("vector")) +
+                                          "; needed by reprojection \"vector\")");
+  }
   if (f.has("alpha")) need.push_back("alpha");
   return need;
 }
@@ -256,6 +267,13 @@ GBuffer read_fields(const InputFrame& f, const std::vector<std::string>& fields,
       (field == "depth" ? g.depth : g.backdepth) = std::move(v);
     } else if (field == "alpha") {
       g.alpha = std::move(v);
+    } else if (field == "vector") {
+      // Blender: the previous-frame position of pixel (col, row), rows top-down, is
+      // (col + X, row − Y) (samples/README.md); stored as the raster offset (X, −Y).
+      for (size_t i = 0; i < v.size(); ++i)
+        if (!std::isfinite(v[i])) bad_value(f, idx[i % 2], i / 2, v[i], "non-finite vector");
+      for (size_t i = 1; i < v.size(); i += 2) v[i] = -v[i];
+      g.motion = std::move(v);
     } else if (field == "metallic") {
       for (size_t i = 0; i < v.size(); ++i)
         if (!std::isfinite(v[i])) bad_value(f, idx[0], i, v[i], "non-finite metallic");

@@ -1,0 +1,161 @@
+// temporal.cpp: see temporal.h.
+#include "hbil/temporal.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <sstream>
+
+#include "hbil/pushpull.h"
+#include "hbil/reproject.h"
+
+namespace hbil {
+
+namespace {
+
+constexpr double kBackgroundLimit = 1e30;
+
+double median_depth(const ViewGBuffer& v) {
+  std::vector<float> z;
+  z.reserve(v.pixels());
+  for (size_t i = 0; i < v.pixels(); ++i)
+    if (!v.is_background(i)) z.push_back(v.position[i].z);
+  if (z.empty()) return 0;
+  std::nth_element(z.begin(), z.begin() + z.size() / 2, z.end());
+  return z[z.size() / 2];
+}
+
+// Angle of the rotation between two world-to-view rotations, degrees.
+double turn_degrees(const Mat3d& a, const Mat3d& b) {
+  const Mat3d r = a.transposed() * b;
+  const double c = std::clamp((r.m[0][0] + r.m[1][1] + r.m[2][2] - 1) / 2, -1.0, 1.0);
+  return std::acos(c) * 180 / std::numbers::pi;
+}
+
+}  // namespace
+
+TemporalChain::TemporalChain(Params p) : p_(std::move(p)) {}
+
+AoFrame TemporalChain::process(const GBuffer& g, const Camera& cam, int frame, bool cut,
+                               const SH9* environment, TemporalReport* report) {
+  TemporalReport rep;
+  const ViewGBuffer v = make_view_gbuffer(g, cam, p_);
+  const size_t n_px = v.pixels();
+  size_t geometry = 0;
+  for (size_t i = 0; i < n_px; ++i) geometry += !v.is_background(i);
+
+  // Cut detection before anything is reprojected.
+  rep.first = !has_history_;
+  if (has_history_ && (view_.width != v.width || view_.height != v.height))
+    cut = true, rep.cut_reason = "resolution changed";
+  if (cut && rep.cut_reason.empty()) rep.cut_reason = "given";
+  if (has_history_ && !cut) {
+    const double move = length(cam.centre() - cam_.centre()), depth = median_depth(v);
+    const double turn = turn_degrees(cam_.R, cam.R);
+    std::ostringstream s;
+    if (depth > 0 && move > p_.cut_camera_jump * depth) {
+      s << "camera moved " << move << " (median depth " << depth << ")";
+      cut = true;
+    } else if (turn > p_.cut_camera_angle) {
+      s << "camera turned " << turn << " degrees";
+      cut = true;
+    }
+    rep.cut_reason = s.str();
+  }
+
+  // Reprojection of the history into this frame.
+  Reprojected r;
+  bool history = has_history_ && !cut;
+  if (history) {
+    const ReprojectTolerance tol{float(p_.history_depth_tolerance),
+                                 float(p_.history_normal_cos)};
+    const bool vector =
+        p_.reprojection == "vector" || (p_.reprojection == "auto" && !g.motion.empty());
+    rep.reprojection = vector ? "vector" : "scatter";
+    r = vector ? reproject_gather(view_, cam_, data_, kChannels, v, cam, g.motion, tol)
+               : reproject_scatter(view_, cam_, data_, kChannels, v, cam, tol);
+    size_t accepted = 0;
+    for (size_t i = 0; i < n_px; ++i) accepted += r.valid[i] != 0;
+    rep.history = geometry ? double(accepted) / double(geometry) : 0;
+    if (geometry && 1 - rep.history > p_.cut_rejected) {
+      std::ostringstream s;
+      s << "history rejected on " << std::lround(100 * (1 - rep.history)) << " % of pixels";
+      rep.cut_reason = s.str();
+      cut = true;
+      history = false;
+      rep.history = 0;
+    }
+  }
+  rep.cut = cut && !rep.first;
+  if (rep.first) rep.cut_reason.clear();
+
+  // Feedback: the history's irradiance, with its holes filled by push/pull.
+  const bool gather = gathers(p_);
+  std::vector<Vec3> feedback;
+  if (history && gather && p_.feedback) {
+    std::vector<float> e(3 * n_px), depth(n_px);
+    for (size_t i = 0; i < n_px; ++i) {
+      for (int c = 0; c < 3; ++c) e[3 * i + c] = r.value[kChannels * i + c];
+      depth[i] = v.is_background(i) ? float(kBackgroundLimit) * 10 : v.position[i].z;
+    }
+    std::vector<uint8_t> filled;
+    if (p_.push_pull)
+      e = push_pull(v.width, v.height, 3, e, r.valid, depth, float(p_.history_depth_tolerance),
+                    &filled);
+    size_t n_filled = 0;
+    for (size_t i = 0; i < n_px; ++i) n_filled += !filled.empty() && filled[i];
+    rep.filled = geometry ? double(n_filled) / double(geometry) : 0;
+    feedback.resize(n_px);
+    for (size_t i = 0; i < n_px; ++i) feedback[i] = Vec3{e[3 * i], e[3 * i + 1], e[3 * i + 2]};
+  }
+
+  FrameInputs in;
+  in.rotate = true;
+  in.frame = frame;
+  in.feedback = feedback.empty() ? nullptr : &feedback;
+  HorizonImage h = search_frame(v, g, cam, p_, in);
+
+  // Accumulation with the history; the result becomes the next frame's history.
+  std::vector<float> next(kChannels * n_px, 0.f);
+  const bool has_e = !h.irradiance.empty();
+  tbb::parallel_for(0, v.height, [&](int y) {
+    for (int x = 0; x < v.width; ++x) {
+      const size_t i = size_t(y) * v.width + x;
+      if (v.is_background(i)) continue;
+      float n = 1;
+      if (history && r.valid[i]) {
+        const float* hv = &r.value[kChannels * i];
+        n = std::min(hv[8] + 1.f, float(p_.history_max));
+        const float a = std::max(1.f / n, 1.f - float(p_.history_weight));
+        auto mix = [a](float old, float cur) { return old + a * (cur - old); };
+        if (has_e) {
+          Vec3& e = h.irradiance[i];
+          e = Vec3{mix(hv[0], e.x), mix(hv[1], e.y), mix(hv[2], e.z)};
+        }
+        h.ao[i] = mix(hv[3], h.ao[i]);
+        h.vis[i] = mix(hv[4], h.vis[i]);
+        const Vec3 b_old = Vec3(cam.world_dir_to_view(Vec3d(Vec3{hv[5], hv[6], hv[7]})));
+        h.bent[i] = Vec3{mix(b_old.x, h.bent[i].x), mix(b_old.y, h.bent[i].y),
+                         mix(b_old.z, h.bent[i].z)};
+      }
+      float* o = &next[kChannels * i];
+      if (has_e) o[0] = h.irradiance[i].x, o[1] = h.irradiance[i].y, o[2] = h.irradiance[i].z;
+      o[3] = h.ao[i];
+      o[4] = h.vis[i];
+      const Vec3 bw = Vec3(cam.view_dir_to_world(Vec3d(h.bent[i])));
+      o[5] = bw.x, o[6] = bw.y, o[7] = bw.z;
+      o[8] = n;
+    }
+  });
+  AoFrame out = assemble_frame(v, g, cam, p_, h, environment);
+  view_ = v;
+  cam_ = cam;
+  data_ = std::move(next);
+  has_history_ = true;
+  if (report) *report = rep;
+  return out;
+}
+
+}  // namespace hbil

@@ -1,0 +1,69 @@
+// temporal.h: the temporal chain of HBIL over the frames of a sequence.
+//
+//   frame N: view-space G-buffer -> cut detection -> reprojection of frame N−1's history
+//   (reproject.h: scatter with both cameras, or gather through the Vector pass) -> push/pull
+//   fill of its disocclusions (pushpull.h) -> horizon search with the slices turned by the
+//   frame number and, as source radiance, DiffCol × (DiffDir + reprojected indirect) + Emit
+//   (HBIL §2.3.1 eq. 17: one more bounce every frame) -> accumulation of irradiance, ao and
+//   the bent vector with the reprojected history -> outputs; the accumulated result is the
+//   history of frame N+1.
+//
+// Only one frame of history is resident, whatever the length of the sequence.
+//
+// Accumulation: a pixel whose history was accepted (depth within history_depth_tolerance,
+// normal within history_normal_cos) has n = min(n_prev + 1, history_max) frames and blends
+// x = lerp(x_history, x_current, max(1/n, 1 − history_weight)): a plain mean until the history
+// is long enough, then an exponential blend. A pixel without history starts at n = 1 with the
+// current frame, so newly revealed pixels converge as fast as the first frame did.
+//
+// Cuts: given by the caller (--cut-frames), or found: the camera moved farther than
+// cut_camera_jump × the frame's median depth or turned more than cut_camera_angle, or the
+// history was rejected on more than cut_rejected of the geometry pixels. A cut drops the
+// history: the frame is computed as a first frame.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "hbil/ao_frame.h"
+#include "hbil/camera.h"
+#include "hbil/farfield.h"
+#include "hbil/gbuffer.h"
+#include "hbil/params.h"
+
+namespace hbil {
+
+// What happened to one frame, for the log.
+struct TemporalReport {
+  bool cut = false;
+  std::string cut_reason;   // "given", or what was detected; "" when no cut
+  bool first = false;       // no history before this frame (first frame of the run)
+  std::string reprojection;  // "scatter" or "vector" ("" without history)
+  double history = 0;        // fraction of geometry pixels with accepted history
+  double filled = 0;         // fraction filled by push/pull (feedback only)
+};
+
+class TemporalChain {
+ public:
+  // `p` with its outputs resolved (resolve_frame_outputs).
+  explicit TemporalChain(Params p);
+
+  // The outputs of frame `frame` (its absolute number: it turns the slices, so that a chunk
+  // of a sequence computes what the whole run computes). `cut`: drop the history first.
+  AoFrame process(const GBuffer& g, const Camera& cam, int frame, bool cut,
+                  const SH9* environment = nullptr, TemporalReport* report = nullptr);
+
+  void reset() { has_history_ = false; }
+
+  // Per-pixel history channels: irradiance (3), ao, vis, bent vector in world space (3), n.
+  static constexpr int kChannels = 9;
+
+ private:
+  Params p_;
+  bool has_history_ = false;
+  ViewGBuffer view_;           // the history's view-space G-buffer
+  Camera cam_;                 // and camera
+  std::vector<float> data_;    // kChannels per pixel
+};
+
+}  // namespace hbil
