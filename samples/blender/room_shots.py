@@ -1,0 +1,57 @@
+"""room_poles with other camera work, for the temporal chain's stability measurements.
+
+    blender -b --factory-startup --python samples/blender/room_shots.py -- \
+        --shot static --out samples/room_static --mode main --samples 256 --frames 1-6
+    blender -b --factory-startup --python samples/blender/room_shots.py -- \
+        --shot cut --out samples/room_cut --mode main --samples 256 --frames 1-6
+
+static: the camera holds room_poles' frame-1 pose on every frame (with the fixed seed the
+        Cycles frames are identical, so any change between hbil's frames is its own flicker).
+cut:    frames 1-3 dolly slowly as in room_poles; frame 4 cuts hard to the opposite corner,
+        looking back at the window wall, and frames 4-6 dolly slowly there.
+Same scene, lights and render settings as room_poles.py (hbil_common.py).
+"""
+import math
+import os
+import sys
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import hbil_common as H  # noqa: E402
+import room_poles  # noqa: E402
+
+SHOT = "static"
+if "--shot" in sys.argv:
+    i = sys.argv.index("--shot")
+    SHOT = sys.argv[i + 1]
+    del sys.argv[i:i + 2]
+if SHOT not in ("static", "cut"):
+    raise SystemExit("--shot must be static or cut")
+
+
+def build(scene):
+    room_poles.build(scene)
+    cam = scene.camera
+    cam.animation_data_clear()
+    a = dict(location=(0.70, -1.90, 1.60),
+             rotation_euler=(math.radians(74.0), 0.0, math.radians(16.0)))
+    if SHOT == "static":
+        H.key(cam, 1, **a)
+        return
+    H.key(cam, 1, **a)
+    H.key(cam, 3, location=(0.60, -1.80, 1.60),
+          rotation_euler=(math.radians(74.0), 0.0, math.radians(14.0)))
+    # The cut: another corner of the room, looking back towards the window wall.
+    H.key(cam, 4, location=(1.70, 1.20, 1.70),
+          rotation_euler=(math.radians(72.0), 0.0, math.radians(105.0)))
+    H.key(cam, 6, location=(1.55, 1.05, 1.65),
+          rotation_euler=(math.radians(73.0), 0.0, math.radians(108.0)))
+    H.smooth_fcurves(cam, 'LINEAR')
+    # Hold frame 3's pose until the jump at frame 4.
+    for fc in cam.animation_data.action.fcurves:
+        for kp in fc.keyframe_points:
+            if int(round(kp.co[0])) == 3:
+                kp.interpolation = 'CONSTANT'
+
+
+if __name__ == "__main__":
+    H.run("room_" + SHOT, build)
