@@ -189,7 +189,7 @@ void run(const RunOptions& o) {
                   "--display-out " + display_out + ": use a .png, .jpg, .jpeg or .exr name");
     if (display_layer.empty())
       display_layer = p.wants("composite") ? "composite" : p.outputs.front();
-    if (display_layer == "bentcone" || !p.wants(display_layer))
+    if (display_layer == "bentcone" || display_layer == "history" || !p.wants(display_layer))
       throw Error(Exit::usage,
                   "--display-layer " + display_layer +
                       ": must be one of the computed colour layers (ao, irradiance, indirect, "

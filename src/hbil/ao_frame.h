@@ -24,6 +24,7 @@ struct AoFrame {
   std::vector<Vec3> ao_rgb;      // ao_multibounce: multi-bounce AO per channel
   std::vector<Vec3> farfield;    // far-field irradiance / π in the bent cone (§2.2.4)
   std::vector<float> composite;  // RGBA, premultiplied like Blender's passes
+  std::vector<float> history;    // temporal chain: frames accumulated per pixel (0: background)
 };
 
 // The diffusely reflected radiance a pixel sends to its neighbours (HBIL eq. 16-17):

@@ -103,7 +103,7 @@ const std::vector<std::string>& gbuffer_fields() {
 
 const std::vector<std::string>& known_outputs() {
   static const std::vector<std::string> o = {"ao",       "bentcone", "irradiance",
-                                             "indirect", "farfield", "composite"};
+                                             "indirect", "farfield", "composite", "history"};
   return o;
 }
 

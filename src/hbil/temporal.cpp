@@ -150,6 +150,8 @@ AoFrame TemporalChain::process(const GBuffer& g, const Camera& cam, int frame, b
     }
   });
   AoFrame out = assemble_frame(v, g, cam, p_, h, environment);
+  out.history.resize(n_px);
+  for (size_t i = 0; i < n_px; ++i) out.history[i] = next[kChannels * i + 8];
   view_ = v;
   cam_ = cam;
   data_ = std::move(next);

@@ -34,6 +34,7 @@ OutputImage make_output(const AoFrame& f, const Params& p) {
       img.channels.insert(img.channels.end(), {"irradiance.R", "irradiance.G", "irradiance.B"});
     if (o == "indirect")
       img.channels.insert(img.channels.end(), {"indirect.R", "indirect.G", "indirect.B"});
+    if (o == "history") img.channels.push_back("history.Y");
   }
   const size_t n = img.channels.size(), pixels = size_t(f.width) * f.height;
   img.pixels.resize(pixels * n);
@@ -41,6 +42,7 @@ OutputImage make_output(const AoFrame& f, const Params& p) {
     float* px = &img.pixels[i * n];
     for (const auto& o : p.outputs) {
       if (o == "ao" && f.ao_rgb.empty()) *px++ = f.ao[i];
+      if (o == "history") *px++ = f.history.empty() ? 1.f : f.history[i];
       if (o == "ao" && !f.ao_rgb.empty())
         *px++ = f.ao_rgb[i].x, *px++ = f.ao_rgb[i].y, *px++ = f.ao_rgb[i].z;
       if (o == "composite")
