@@ -29,7 +29,8 @@ print("%.4f / %+.4f / %.2f" % (o["rmse"], o["mean_error"], o["psnr"]))'
 }
 psnr() { sed 's|.* / ||' <<<"$1"; }
 
-echo "AO and bent cones only (outputs [\"ao\",\"bentcone\"]), ao against the Cycles AO pass:"
+echo "Single frames (--set temporal=false), AO and bent cones only (outputs [\"ao\",\"bentcone\"]),"
+echo "ao against the Cycles AO pass:"
 echo
 echo "| scene | preset | AO RMSE / mean / PSNR (dB) | s/frame (256x144) |"
 echo "|---|---|---|---|"
@@ -37,7 +38,7 @@ for scene in courtyard room_poles; do
   for preset in fast default quality reference; do
     in="samples/$scene/frame_####.exr"
     spf=$(run "ao-$scene-$preset" "$in" --preset "presets/$preset.json" \
-      --set 'outputs=["ao","bentcone"]')
+      --set 'outputs=["ao","bentcone"]' --set temporal=false)
     echo "| $scene | $preset | $(cmp "ao-$scene-$preset" "$in" ao AO) | $spf |"
   done
 done
@@ -53,7 +54,7 @@ gi() {
     local label=${cfg%%|*} args=${cfg#*|} name spf a i c
     name="gi-$scene-${label%%,*}-${#args}"
     # shellcheck disable=SC2086
-    spf=$(eval run "$name" "'$dir/frame_####.exr'" $args)
+    spf=$(eval run "$name" "'$dir/frame_####.exr'" --set temporal=false $args)
     a=$(cmp "$name" "$dir/frame_####.exr" ao AO)
     i=$(cmp "$name" "$dir/bounce1/frame_####.exr" indirect 'DiffCol*DiffInd')
     c=$(cmp "$name" "$dir/frame_####.exr" composite Combined)
@@ -61,7 +62,8 @@ gi() {
   done
 }
 echo
-echo "Default outputs (ao, bentcone, irradiance, indirect, composite), one in-frame bounce;"
+echo "Single frames (--set temporal=false), default outputs (ao, bentcone, irradiance, indirect,"
+echo "composite), one in-frame bounce;"
 echo "indirect against Cycles DiffCol*DiffInd rendered with 1 diffuse bounce, composite"
 echo "against Cycles Combined (8 bounces):"
 echo
@@ -71,7 +73,7 @@ gi samples/courtyard
 gi samples/room_poles
 
 echo
-echo "In-frame bounces (default otherwise), against the 8-bounce render: indirect against"
+echo "Single frames (--set temporal=false), in-frame bounces, against the 8-bounce render: indirect against"
 echo "DiffCol*DiffInd, composite against Combined:"
 echo
 echo "| scene | bounces | indirect RMSE / mean / PSNR | composite RMSE / mean / PSNR | s/frame |"
@@ -79,11 +81,90 @@ echo "|---|---|---|---|---|"
 for scene in courtyard room_poles; do
   for b in 1 2 3 4; do
     in="samples/$scene/frame_####.exr"
-    spf=$(run "b-$scene-$b" "$in" --set bounces=$b --set 'outputs=["indirect","composite"]')
+    spf=$(run "b-$scene-$b" "$in" --set bounces=$b --set 'outputs=["indirect","composite"]' \
+      --set temporal=false)
     echo "| $scene | $b | $(cmp "b-$scene-$b" "$in" indirect 'DiffCol*DiffInd') |" \
       "$(cmp "b-$scene-$b" "$in" composite Combined) | $spf |"
   done
 done
+
+# The temporal chain (the default) against single frames on the camera moves.
+py=${PYTHON:-/usr/bin/python3}  # with OpenImageIO and numpy (python3-openimageio)
+echo
+echo "Temporal chain (default) against single frames (--set temporal=false), all 8 frames:"
+echo
+echo "| scene | run | AO PSNR | indirect vs 1-bounce PSNR | indirect vs 8-bounce PSNR | composite vs Combined PSNR | s/frame |"
+echo "|---|---|---|---|---|---|---|"
+for scene in courtyard room_poles; do
+  in="samples/$scene/frame_####.exr"
+  for cfg in "single frames|--set temporal=false" "temporal (default)|"; do
+    label=${cfg%%|*} args=${cfg#*|} name="t-$scene-${#cfg}"
+    # shellcheck disable=SC2086
+    spf=$(run "$name" "$in" $args)
+    echo "| $scene | $label | $(psnr "$(cmp "$name" "$in" ao AO)") |" \
+      "$(psnr "$(cmp "$name" "samples/$scene/bounce1/frame_####.exr" indirect 'DiffCol*DiffInd')") |" \
+      "$(psnr "$(cmp "$name" "$in" indirect 'DiffCol*DiffInd')") |" \
+      "$(psnr "$(cmp "$name" "$in" composite Combined)") | $spf |"
+  done
+done
+
+# frames PSNR of indirect against the 8-bounce DiffCol*DiffInd, frame by frame.
+per_frame() {
+  "$hbil" compare "$tmp/$1/f_####.exr" "$2" --layer indirect --ref-layer 'DiffCol*DiffInd' \
+    --json | python3 -c 'import json,sys
+print(" / ".join("%.2f" % f["psnr"] for f in json.load(sys.stdin)["frames"]))'
+}
+echo
+echo "Static camera (samples/room_static, 6 identical Cycles frames): flicker = mean |composite_k -"
+echo "composite_(k-1)| / mean composite; indirect against the 8-bounce DiffCol*DiffInd, frame by frame:"
+echo
+echo "| run | flicker | indirect PSNR, frames 1-6 |"
+echo "|---|---|---|"
+in="samples/room_static/frame_####.exr"
+for cfg in "single frames (temporal=false)|--set temporal=false" \
+  "temporal, no accumulation (history_max=1)|--set history_max=1" \
+  "temporal, no feedback|--set feedback=false" "temporal (default)|"; do
+  label=${cfg%%|*} args=${cfg#*|} name="s-${#cfg}"
+  # shellcheck disable=SC2086
+  run "$name" "$in" $args >/dev/null
+  echo "| $label | $("$py" bench/stability.py flicker "$tmp/$name/f_####.exr" 1-6) |" \
+    "$(per_frame "$name" "$in") |"
+done
+
+echo
+echo "Camera moves, frame by frame, indirect against the 8-bounce DiffCol*DiffInd (temporal default):"
+echo
+for scene in courtyard room_poles; do
+  in="samples/$scene/frame_####.exr"
+  run "pf-$scene" "$in" >/dev/null
+  echo "- $scene: $(per_frame "pf-$scene" "$in") dB"
+done
+
+echo
+echo "Disocclusions (history.Y = 1 after frame 1): indirect RMSE against the 8-bounce render inside"
+echo "them and elsewhere, and their share of the geometry pixels:"
+echo
+echo "| scene | RMSE newly revealed | RMSE elsewhere | share (%) |"
+echo "|---|---|---|---|"
+for scene in courtyard room_poles; do
+  in="samples/$scene/frame_####.exr"
+  run "d-$scene" "$in" --set 'outputs=["auto","history"]' >/dev/null
+  read -r a b c < <("$py" bench/stability.py disocclusion "$tmp/d-$scene/f_####.exr" "$in" 1-8)
+  echo "| $scene | $a | $b | $c |"
+done
+
+echo
+echo "Hard cut (samples/room_cut, cut at frame 4), indirect against the 8-bounce render:"
+echo
+in="samples/room_cut/frame_####.exr"
+"$hbil" run "$in" -o "$tmp/cut/f_####.exr" --no-display 2>&1 | grep 'cut (' | sed 's/^/    /'
+"$hbil" run "$in" -o "$tmp/cut-fresh/f_####.exr" --no-display --frames 4-6 -q
+echo "- frame by frame (temporal): $(per_frame cut "$in") dB"
+run cut-single "$in" --set temporal=false >/dev/null
+echo "- frame by frame (single frames): $(per_frame cut-single "$in") dB"
+"$hbil" compare "$tmp/cut/f_####.exr" "$tmp/cut-fresh/f_####.exr" --layer composite \
+  --mask none --frames 4-4 --json | python3 -c 'import json,sys
+print("- frame 4 against a run that starts at frame 4: RMSE %g" % json.load(sys.stdin)["overall"]["rmse"])'
 
 if [ -n "${HELDOUT:-}" ]; then
   echo
@@ -92,6 +173,11 @@ if [ -n "${HELDOUT:-}" ]; then
   echo "| scene | occlusion | AO PSNR | indirect RMSE / mean / PSNR | composite RMSE / mean / PSNR | s/frame |"
   echo "|---|---|---|---|---|---|"
   gi "$HELDOUT"
+  h=$(basename "$HELDOUT")
+  spf=$(run "h-temporal" "$HELDOUT/frame_####.exr")
+  echo "| $h | temporal chain (default) | $(psnr "$(cmp h-temporal "$HELDOUT/frame_####.exr" ao AO)") |" \
+    "$(cmp h-temporal "$HELDOUT/bounce1/frame_####.exr" indirect 'DiffCol*DiffInd') |" \
+    "$(cmp h-temporal "$HELDOUT/frame_####.exr" composite Combined) | $spf |"
 fi
 
 [ -n "${SKIP_HD:-}" ] && exit 0
@@ -108,7 +194,7 @@ json.dump(j, open(sys.argv[2], "w"))
 PY
 done
 echo
-echo "1920x1080 (room_poles frames 1-4 upscaled), s/frame:"
+echo "1920x1080 (room_poles frames 1-4 upscaled), s/frame (temporal chain on):"
 echo
 echo "| preset | ao + bentcone | default outputs |"
 echo "|---|---|---|"

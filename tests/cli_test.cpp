@@ -323,6 +323,34 @@ TEST_F(Cli, CutFramesAreLoggedAndBadListsRefused) {
                  Exit::usage, {"--cut-frames", "\"x\""});
 }
 
+TEST_F(Cli, HardCutIsDetected) {
+  const std::string in = std::string(HBIL_SOURCE_DIR) + "/samples/room_cut/frame_####.exr";
+  const RunResult r =
+      hbil(run_args(in, path("cut/f_####.exr"), "--no-display --frames 2-5 --set 'outputs=[\"ao\"]'"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(contains(r.err, "frame 4: cut (camera moved")) << r.err;
+  EXPECT_FALSE(contains(r.err, "frame 3: cut")) << r.err;
+  EXPECT_FALSE(contains(r.err, "frame 5: cut")) << r.err;
+}
+
+TEST_F(Cli, AccumulationReducesFlickerOnAStaticCamera) {
+  // samples/room_static: identical Cycles frames; the slices turn every frame, so each
+  // frame's own estimate changes and only the accumulation keeps the output still.
+  // Measured composite RMS change between frames 3 and 4: 0.0013 accumulated, 0.0059 not.
+  const std::string in = std::string(HBIL_SOURCE_DIR) + "/samples/room_static/frame_####.exr";
+  auto change = [&](const std::string& name, const std::string& extra) {
+    const RunResult r =
+        hbil(run_args(in, path(name + "/f_####.exr"), "--no-display --frames 1-4 " + extra));
+    EXPECT_EQ(r.code, 0) << r.err;
+    const RunResult c = hbil("compare " + q(path(name + "/f_0004.exr")) + " " +
+                             q(path(name + "/f_0003.exr")) + " --layer composite --json");
+    EXPECT_EQ(c.code, 0) << c.err;
+    return json::parse(c.out)["overall"]["rmse"].get<double>();
+  };
+  const double accumulated = change("acc", ""), single = change("one", "--set history_max=1");
+  EXPECT_LT(accumulated, 0.5 * single) << accumulated << " vs " << single;
+}
+
 // --- Failures: exit code, a message naming the file and frame, nothing written --------
 
 TEST_F(Cli, MissingPassFailsWithoutOutput) {

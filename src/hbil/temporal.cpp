@@ -55,6 +55,7 @@ AoFrame TemporalChain::process(const GBuffer& g, const Camera& cam, int frame, b
     const double move = length(cam.centre() - cam_.centre()), depth = median_depth(v);
     const double turn = turn_degrees(cam_.R, cam.R);
     std::ostringstream s;
+    s.precision(3);
     if (depth > 0 && move > p_.cut_camera_jump * depth) {
       s << "camera moved " << move << " (median depth " << depth << ")";
       cut = true;
