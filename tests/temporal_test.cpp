@@ -120,6 +120,14 @@ TEST(Temporal, CutDropsTheHistory) {
   EXPECT_EQ(0, std::memcmp(given.ao.data(), first4.ao.data(), given.ao.size() * sizeof(float)));
 }
 
+TEST(Temporal, AutoOutputsAreResolvedOnTheFirstFrame) {
+  const Scene s = groove();
+  TemporalChain chain{Params{}};  // outputs "auto": the groove has DiffCol and DiffDir
+  const AoFrame f = chain.process(s.g, s.cam, 1, false);
+  EXPECT_EQ(f.irradiance.size(), s.g.pixels());
+  EXPECT_EQ(f.composite.size(), 4 * s.g.pixels());
+}
+
 TEST(Temporal, SlicesTurnWithTheFrame) {
   // Frame 0 is the unrotated pattern; other frames turn by a fraction of the spacing.
   float r = 1, j = 1;

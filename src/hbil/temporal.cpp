@@ -41,6 +41,7 @@ TemporalChain::TemporalChain(Params p) : p_(std::move(p)) {}
 AoFrame TemporalChain::process(const GBuffer& g, const Camera& cam, int frame, bool cut,
                                const SH9* environment, TemporalReport* report) {
   TemporalReport rep;
+  if (p_.wants("auto")) p_ = resolve_frame_outputs(g, p_);  // once, on the first frame
   const ViewGBuffer v = make_view_gbuffer(g, cam, p_);
   const size_t n_px = v.pixels();
   size_t geometry = 0;

@@ -45,7 +45,7 @@ struct TemporalReport {
 
 class TemporalChain {
  public:
-  // `p` with its outputs resolved (resolve_frame_outputs).
+  // Outputs "auto" are resolved on the first frame (resolve_frame_outputs).
   explicit TemporalChain(Params p);
 
   // The outputs of frame `frame` (its absolute number: it turns the slices, so that a chunk
