@@ -128,6 +128,20 @@ TEST(Temporal, AutoOutputsAreResolvedOnTheFirstFrame) {
   EXPECT_EQ(f.composite.size(), 4 * s.g.pixels());
 }
 
+TEST(Temporal, VectorPassOnlyForThePreviousFrame) {
+  // Blender's Vector points at frame N−1: with a gap in the frame numbers "auto" scatters.
+  Scene s = groove();
+  s.g.motion.assign(2 * s.g.pixels(), 0.f);  // a static camera: no motion
+  for (const auto& [next, expected] : {std::pair{2, "vector"}, std::pair{3, "scatter"}}) {
+    TemporalChain chain(params());
+    chain.process(s.g, s.cam, 1, false);
+    TemporalReport rep;
+    chain.process(s.g, s.cam, next, false, nullptr, &rep);
+    EXPECT_EQ(rep.reprojection, expected) << "frame " << next;
+    EXPECT_GT(rep.history, 0.99) << "frame " << next;
+  }
+}
+
 TEST(Temporal, SlicesTurnWithTheFrame) {
   // Frame 0 is the unrotated pattern; other frames turn by a fraction of the spacing.
   float r = 1, j = 1;

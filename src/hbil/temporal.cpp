@@ -73,8 +73,9 @@ AoFrame TemporalChain::process(const GBuffer& g, const Camera& cam, int frame, b
   if (history) {
     const ReprojectTolerance tol{float(p_.history_depth_tolerance),
                                  float(p_.history_normal_cos)};
-    const bool vector =
-        p_.reprojection == "vector" || (p_.reprojection == "auto" && !g.motion.empty());
+    // Blender's Vector points at frame N−1: "auto" scatters when the history is another frame.
+    const bool vector = p_.reprojection == "vector" ||
+                        (p_.reprojection == "auto" && !g.motion.empty() && frame == frame_ + 1);
     rep.reprojection = vector ? "vector" : "scatter";
     r = vector ? reproject_gather(view_, cam_, data_, kChannels, v, cam, g.motion, tol)
                : reproject_scatter(view_, cam_, data_, kChannels, v, cam, tol);
@@ -156,6 +157,7 @@ AoFrame TemporalChain::process(const GBuffer& g, const Camera& cam, int frame, b
   for (size_t i = 0; i < n_px; ++i) out.history[i] = next[kChannels * i + 8];
   view_ = v;
   cam_ = cam;
+  frame_ = frame;
   data_ = std::move(next);
   has_history_ = true;
   if (report) *report = rep;

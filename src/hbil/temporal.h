@@ -63,6 +63,7 @@ class TemporalChain {
   bool has_history_ = false;
   ViewGBuffer view_;           // the history's view-space G-buffer
   Camera cam_;                 // and camera
+  int frame_ = 0;              // and frame number
   std::vector<float> data_;    // kChannels per pixel
 };
 
