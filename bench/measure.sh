@@ -3,6 +3,9 @@
 #   bench/measure.sh [BUILD_DIR]          (default: build)
 #   HELDOUT=/path/to/study bench/measure.sh   also measure a scene rendered with
 #       samples/blender/study.py (frames 1-4 + bounce1/; README "Held-out scene")
+#   HELDOUT_MOVE=dir HELDOUT_CUT=dir bench/measure.sh   also run the temporal chain on camera
+#       moves rendered with samples/blender/study_shots.py (--shot move, frames 1-16; --shot cut,
+#       frames 1-12), which nothing was tuned on
 #   SKIP_HD=1 bench/measure.sh            skip the 1920x1080 timings
 # Every accuracy figure is `hbil compare` (RMSE, mean error, PSNR with peak 1, over the
 # non-background pixels of all frames); every time is the "s per frame" of `hbil run`'s
@@ -178,6 +181,43 @@ if [ -n "${HELDOUT:-}" ]; then
   echo "| $h | temporal chain (default) | $(psnr "$(cmp h-temporal "$HELDOUT/frame_####.exr" ao AO)") |" \
     "$(cmp h-temporal "$HELDOUT/bounce1/frame_####.exr" indirect 'DiffCol*DiffInd') |" \
     "$(cmp h-temporal "$HELDOUT/frame_####.exr" composite Combined) | $spf |"
+fi
+
+if [ -n "${HELDOUT_MOVE:-}" ]; then
+  mv_in="$HELDOUT_MOVE/frame_####.exr"
+  echo
+  echo "Never-seen camera move $HELDOUT_MOVE (16 frames), indirect against its 8-bounce"
+  echo "DiffCol*DiffInd frame by frame, and frame-to-frame change of composite against Cycles'"
+  echo "Combined (hbil / Cycles / ratio):"
+  echo
+  echo "| run | indirect PSNR per frame | overall | composite vs Combined PSNR | change hbil / Cycles / ratio |"
+  echo "|---|---|---|---|---|"
+  for cfg in "single frames|--set temporal=false" "temporal (default)|"; do
+    label=${cfg%%|*} args=${cfg#*|} name="hm-${#cfg}"
+    # shellcheck disable=SC2086
+    run "$name" "$mv_in" $args >/dev/null
+    echo "| $label | $(per_frame "$name" "$mv_in") | $(psnr "$(cmp "$name" "$mv_in" indirect 'DiffCol*DiffInd')") |" \
+      "$(psnr "$(cmp "$name" "$mv_in" composite Combined)") |" \
+      "$("$py" bench/stability.py changes "$tmp/$name/f_####.exr" "$mv_in" 1-16 | sed 's| | / |g') |"
+  done
+  whole=$name  # the last run: temporal (default)
+  "$hbil" run "$mv_in" -o "$tmp/hm-chunk/f_####.exr" --no-display --frames 11-16 --preroll 4 -q
+  for layer in ao irradiance composite; do
+    "$hbil" compare "$tmp/hm-chunk/f_####.exr" "$tmp/$whole/f_####.exr" --layer $layer \
+      --mask none --frames 11-16 --json | python3 -c 'import json,sys
+print("- chunk 11-16 with 4 frames of pre-roll against the whole run, '"$layer"': RMS %.4f" % json.load(sys.stdin)["overall"]["rmse"])'
+  done
+fi
+if [ -n "${HELDOUT_CUT:-}" ]; then
+  ct_in="$HELDOUT_CUT/frame_####.exr"
+  echo
+  echo "Never-seen hard cut $HELDOUT_CUT (12 frames, cut at frame 7), indirect against its"
+  echo "8-bounce render frame by frame:"
+  echo
+  "$hbil" run "$ct_in" -o "$tmp/hc/f_####.exr" --no-display 2>&1 | grep 'cut (' | sed 's/^/    /'
+  echo "- temporal: $(per_frame hc "$ct_in") dB"
+  run hc-single "$ct_in" --set temporal=false >/dev/null
+  echo "- single frames: $(per_frame hc-single "$ct_in") dB"
 fi
 
 [ -n "${SKIP_HD:-}" ] && exit 0

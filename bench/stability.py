@@ -4,6 +4,9 @@
     stability.py flicker OUT_PATTERN FRAMES
         mean |composite_k - composite_(k-1)| / mean composite over geometry pixels (alpha > 0),
         averaged over consecutive frame pairs
+    stability.py changes OUT_PATTERN REF_PATTERN FRAMES
+        the same flicker measure for hbil's composite and for the reference's Combined (a moving
+        camera changes the true image too; hbil should change as much as the reference, no more)
     stability.py disocclusion OUT_PATTERN REF_PATTERN FRAMES
         RMSE of indirect against the reference's DiffCol*DiffInd over pixels whose history.Y
         is 1 (newly revealed: no accepted history) and over pixels with history > 1, frames
@@ -39,18 +42,20 @@ def frames(text):
     return list(range(int(a), int(b) + 1))
 
 
-def flicker(out, fr):
-    rgb = ["composite.R", "composite.G", "composite.B"]
+def flicker(out, fr, prefix="composite.", quiet=False):
+    rgb = [prefix + "R", prefix + "G", prefix + "B"]
     prev = None
     values = []
     for f in fr:
-        c = channels(frame_path(out, f), rgb + ["composite.A"])
+        c = channels(frame_path(out, f), rgb + [prefix + "A"])
         img, alpha = np.stack(c[:3], -1), c[3]
         if prev is not None:
             m = alpha > 0
             values.append(np.abs(img - prev)[m].mean() / img[m].mean())
         prev = img
-    print("%.5f" % np.mean(values))
+    if not quiet:
+        print("%.5f" % np.mean(values))
+    return np.mean(values)
 
 
 def disocclusion(out, ref, fr):
@@ -75,6 +80,10 @@ def disocclusion(out, ref, fr):
 if __name__ == "__main__":
     if len(sys.argv) == 4 and sys.argv[1] == "flicker":
         flicker(sys.argv[2], frames(sys.argv[3]))
+    elif len(sys.argv) == 5 and sys.argv[1] == "changes":
+        a = flicker(sys.argv[2], frames(sys.argv[4]), quiet=True)
+        b = flicker(sys.argv[3], frames(sys.argv[4]), "ViewLayer.Combined.", quiet=True)
+        print("%.4f %.4f %.2f" % (a, b, a / b))
     elif len(sys.argv) == 5 and sys.argv[1] == "disocclusion":
         disocclusion(sys.argv[2], sys.argv[3], frames(sys.argv[4]))
     else:

@@ -1,0 +1,59 @@
+"""The held-out "study" room (study.py) with camera moves nothing was tuned on, for the
+temporal chain's "never seen" check (README "Temporal chain").
+
+    blender -b --factory-startup --python samples/blender/study_shots.py -- \
+        --shot move --out /tmp/study_move --mode main --samples 128 --frames 1-16
+    blender -b --factory-startup --python samples/blender/study_shots.py -- \
+        --shot cut --out /tmp/study_cut --mode main --samples 128 --frames 1-12
+
+move: 16 frames walking from the front right corner (looking at the bookcase) to the front
+      left (looking at the lamp): 3.2 m and an 84 degree pan.
+cut:  frames 1-6 drift slowly at the open front; frame 7 cuts to the window corner looking
+      back at the table and the blue wall, frames 7-12 drift slowly there.
+Not committed (like study.py); add --mode backfaces renders and merge_backdepth.py as for the
+samples.
+"""
+import math
+import os
+import sys
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import hbil_common as H  # noqa: E402
+import study  # noqa: E402
+
+SHOT = "move"
+if "--shot" in sys.argv:
+    i = sys.argv.index("--shot")
+    SHOT = sys.argv[i + 1]
+    del sys.argv[i:i + 2]
+if SHOT not in ("move", "cut"):
+    raise SystemExit("--shot must be move or cut")
+
+
+def pose(cam, frame, loc, yaw, pitch=76.0):
+    H.key(cam, frame, location=loc,
+          rotation_euler=(math.radians(pitch), 0.0, math.radians(yaw)))
+
+
+def build(scene):
+    study.build(scene)
+    cam = scene.camera
+    cam.animation_data_clear()
+    if SHOT == "move":
+        pose(cam, 1, (2.0, -1.5, 1.5), 38.0)
+        pose(cam, 16, (-1.2, -1.6, 1.6), -46.0)
+        H.smooth_fcurves(cam, 'BEZIER')
+        return
+    pose(cam, 1, (1.6, -2.6, 1.55), 22.0)
+    pose(cam, 6, (1.2, -2.5, 1.50), 16.0)
+    pose(cam, 7, (-2.0, 1.5, 1.70), -123.0, 74.0)
+    pose(cam, 12, (-1.9, 1.3, 1.65), -120.0, 74.0)
+    H.smooth_fcurves(cam, 'LINEAR')
+    for fc in cam.animation_data.action.fcurves:
+        for kp in fc.keyframe_points:
+            if int(round(kp.co[0])) == 6:
+                kp.interpolation = 'CONSTANT'
+
+
+if __name__ == "__main__":
+    H.run("study_" + SHOT, build)
