@@ -318,15 +318,15 @@ TEST_F(Cli, CutFramesAreLoggedAndBadListsRefused) {
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_TRUE(contains(r.err, "frame 3: cut (given), history dropped")) << r.err;
   EXPECT_FALSE(contains(r.err, "frame 2: cut")) << r.err;
-  expect_failure(run_args(test::kRoomPoles + "/frame_####.exr", path("out2/f_####.exr"),
-                          "--cut-frames 3,x"),
-                 Exit::usage, {"--cut-frames", "\"x\""});
+  expect_failure(
+      run_args(test::kRoomPoles + "/frame_####.exr", path("out2/f_####.exr"), "--cut-frames 3,x"),
+      Exit::usage, {"--cut-frames", "\"x\""});
 }
 
 TEST_F(Cli, HardCutIsDetected) {
   const std::string in = std::string(HBIL_SOURCE_DIR) + "/samples/room_cut/frame_####.exr";
-  const RunResult r =
-      hbil(run_args(in, path("cut/f_####.exr"), "--no-display --frames 2-5 --set 'outputs=[\"ao\"]'"));
+  const RunResult r = hbil(
+      run_args(in, path("cut/f_####.exr"), "--no-display --frames 2-5 --set 'outputs=[\"ao\"]'"));
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_TRUE(contains(r.err, "frame 4: cut (camera moved")) << r.err;
   EXPECT_FALSE(contains(r.err, "frame 3: cut")) << r.err;

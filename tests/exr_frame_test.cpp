@@ -346,10 +346,10 @@ TEST_F(ExrFrame, FresnelLayersAreReadOnlyWhenMapped) {
   // Blender writes shader AOVs as <layer>.<name>.X (value) and .R/.G/.B/.A (colour).
   const std::string path = file("frame_0004.exr");
   auto channels = blender_channels("ViewLayer");
-  for (const char* c : {"ViewLayer.DiffCol.R", "ViewLayer.DiffCol.G", "ViewLayer.DiffCol.B",
-                        "ViewLayer.DiffDir.R", "ViewLayer.DiffDir.G", "ViewLayer.DiffDir.B",
-                        "ViewLayer.Metallic.X", "ViewLayer.F0.R", "ViewLayer.F0.G",
-                        "ViewLayer.F0.B"})
+  for (const char* c :
+       {"ViewLayer.DiffCol.R", "ViewLayer.DiffCol.G", "ViewLayer.DiffCol.B", "ViewLayer.DiffDir.R",
+        "ViewLayer.DiffDir.G", "ViewLayer.DiffDir.B", "ViewLayer.Metallic.X", "ViewLayer.F0.R",
+        "ViewLayer.F0.G", "ViewLayer.F0.B"})
     channels.push_back(c);
   test::write_exr(path, kW, kH, channels, [&](int x, int y, int c) {
     return channels[c] == "ViewLayer.Metallic.X" ? 0.125f * float(x % 8)

@@ -187,8 +187,8 @@ TEST(Interleave, DeinterleavedBuffersMatchStridedReadInPlace) {
   ASSERT_EQ(a.irradiance.size(), b.irradiance.size());
   EXPECT_EQ(0, std::memcmp(a.ao.data(), b.ao.data(), a.ao.size() * sizeof(float)));
   EXPECT_EQ(0, std::memcmp(a.bent.data(), b.bent.data(), a.bent.size() * sizeof(Vec3)));
-  EXPECT_EQ(0, std::memcmp(a.irradiance.data(), b.irradiance.data(),
-                           a.irradiance.size() * sizeof(Vec3)));
+  EXPECT_EQ(
+      0, std::memcmp(a.irradiance.data(), b.irradiance.data(), a.irradiance.size() * sizeof(Vec3)));
   EXPECT_NE(0, std::memcmp(a.ao.data(), constant.ao.data(), a.ao.size() * sizeof(float)))
       << "the per-pixel thickness was not used";
 }

@@ -175,7 +175,7 @@ TEST(NearFieldIrradiance, FresnelWeightOfTheReceiver) {
     EXPECT_EQ(f0.irradiance[i].z, 0.f);  // a perfect mirror reflects no diffuse light
     EXPECT_FLOAT_EQ(f0.indirect[i].x, 0.75f * plain.indirect[i].x);
     EXPECT_FLOAT_EQ(half_metal.irradiance[i].y, 0.48f * e.y);  // 0.96 (1 − 0.5)
-    EXPECT_EQ(f0.ao[i], plain.ao[i]);                           // occlusion is unchanged
+    EXPECT_EQ(f0.ao[i], plain.ao[i]);                          // occlusion is unchanged
   }
   EXPECT_GT(lit, 1000);
 }
@@ -269,8 +269,8 @@ TEST(VisibilityBitmask, MeasuredThicknessCoversTheSurfaceBetweenSamples) {
         continue;
       }
       worst = std::max(worst, double(std::fabs(measured.ao[i] - horizon.ao[i])));
-      worst_irr = std::max(
-          worst_irr, double(std::fabs(measured.irradiance[i].y - horizon.irradiance[i].y)));
+      worst_irr = std::max(worst_irr,
+                           double(std::fabs(measured.irradiance[i].y - horizon.irradiance[i].y)));
       mean += measured.ao[i] - horizon.ao[i];
       leaked += points.ao[i] - horizon.ao[i];
       ++n;

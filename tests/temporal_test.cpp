@@ -67,9 +67,8 @@ TEST(Temporal, StaticCameraConvergesTowardsTheManyBounceResult) {
   }
   const double gap = mean_abs_diff(s, one.irradiance, ref.irradiance);
   RecordProperty("one_bounce_gap", std::to_string(gap));
-  RecordProperty("error_frame_1_5_40",
-                 std::to_string(err[0]) + " " + std::to_string(err[4]) + " " +
-                     std::to_string(err.back()));
+  RecordProperty("error_frame_1_5_40", std::to_string(err[0]) + " " + std::to_string(err[4]) + " " +
+                                           std::to_string(err.back()));
   // Measured: one-bounce gap 0.0171; error 0.0175 at frame 1 (one bounce, other slice
   // rotation), 0.0060 at frame 5, 0.0016 at frame 40 (interleaving noise and the history's lag).
   EXPECT_NEAR(err[0], gap, 0.05 * gap);  // frame 1 is the single-bounce result
@@ -94,7 +93,8 @@ TEST(Temporal, CameraRotationKeepsTheHistory) {
   in.frame = 2;
   const Params r = resolve_frame_outputs(b.g, p);
   const ViewGBuffer v = make_view_gbuffer(b.g, b.cam, r);
-  const AoFrame single = assemble_frame(v, b.g, b.cam, r, search_frame(v, b.g, b.cam, r, in), nullptr);
+  const AoFrame single =
+      assemble_frame(v, b.g, b.cam, r, search_frame(v, b.g, b.cam, r, in), nullptr);
   EXPECT_LT(mean_abs_diff(b, f.irradiance, single.irradiance), 0.01);
 }
 

@@ -39,6 +39,19 @@ FRAMES = (1, 8)
 # --------------------------------------------------------------------------- #
 # arguments
 # --------------------------------------------------------------------------- #
+def pop_choice(flag, choices):
+    """Removes `flag VALUE` from sys.argv (before parse_args sees it) and returns VALUE, which
+    must be one of `choices` (default: the first). Used by the shot variants of the scenes."""
+    value = choices[0]
+    if flag in sys.argv:
+        i = sys.argv.index(flag)
+        value = sys.argv[i + 1]
+        del sys.argv[i:i + 2]
+    if value not in choices:
+        raise SystemExit("%s must be one of %s" % (flag, ", ".join(choices)))
+    return value
+
+
 def parse_args():
     argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
     p = argparse.ArgumentParser()

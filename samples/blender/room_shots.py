@@ -19,13 +19,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import hbil_common as H  # noqa: E402
 import room_poles  # noqa: E402
 
-SHOT = "static"
-if "--shot" in sys.argv:
-    i = sys.argv.index("--shot")
-    SHOT = sys.argv[i + 1]
-    del sys.argv[i:i + 2]
-if SHOT not in ("static", "cut"):
-    raise SystemExit("--shot must be static or cut")
+SHOT = H.pop_choice("--shot", ("static", "cut"))
 
 
 def build(scene):

@@ -21,13 +21,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import hbil_common as H  # noqa: E402
 import study  # noqa: E402
 
-SHOT = "move"
-if "--shot" in sys.argv:
-    i = sys.argv.index("--shot")
-    SHOT = sys.argv[i + 1]
-    del sys.argv[i:i + 2]
-if SHOT not in ("move", "cut"):
-    raise SystemExit("--shot must be move or cut")
+SHOT = H.pop_choice("--shot", ("move", "cut"))
 
 
 def pose(cam, frame, loc, yaw, pitch=76.0):

@@ -31,8 +31,9 @@ void add_preset(CLI::App& app) {
           std::cout << "  [" << i.min << ", " << i.max << "]";
         std::cout << "  (" << i.unit << ")\n    " << i.help << "\n";
       }
-      std::cout << "method = " << d["method"].dump()
-                << "\n    occlusion model: \"horizon\" (HBIL) or \"bitmask\" (visibility bitmask)\n";
+      std::cout
+          << "method = " << d["method"].dump()
+          << "\n    occlusion model: \"horizon\" (HBIL) or \"bitmask\" (visibility bitmask)\n";
       std::cout << "environment = " << d["environment"].dump()
                 << "\n    far field: \"\" (off), an equirectangular EXR, or \"rgb:r,g,b\"\n";
       std::cout << "view_layer = " << d["view_layer"].dump()

@@ -91,8 +91,8 @@ Job plan(const RunOptions& o) {
   }
   if (o.preroll > 0) {
     if (!job.in.is_sequence())
-      throw Error(Exit::usage, "--preroll needs an input frame pattern, got the single file " +
-                                   o.input);
+      throw Error(Exit::usage,
+                  "--preroll needs an input frame pattern, got the single file " + o.input);
     // The frames of the sequence that exist in [first − P, first − 1].
     const int first = job.frames.front();
     for (int f : job.in.existing_frames())
@@ -157,8 +157,8 @@ void run(const RunOptions& o) {
       std::ostringstream s;
       s << "hbil: bitmask thickness: ";
       if (first.has("backdepth"))
-        s << "per pixel from " << first.spec.channelnames[first.channels.at("backdepth")[0]]
-          << " (" << p.thickness << " where it has no back face)";
+        s << "per pixel from " << first.spec.channelnames[first.channels.at("backdepth")[0]] << " ("
+          << p.thickness << " where it has no back face)";
       else
         s << p.thickness << " world units"
           << (p.thickness_growth > 0 ? " + " + std::to_string(p.thickness_growth) + " x depth"
@@ -194,10 +194,10 @@ void run(const RunOptions& o) {
                   "--display-layer " + display_layer +
                       ": must be one of the computed colour layers (ao, irradiance, indirect, "
                       "farfield, composite) named in outputs");
-    display.emplace(io::DisplaySettings{o.ocio_config,
-                                        o.input_space.empty() ? p.input_space : o.input_space,
-                                        o.display, o.view},
-                    shipped_ocio_config());
+    display.emplace(
+        io::DisplaySettings{o.ocio_config, o.input_space.empty() ? p.input_space : o.input_space,
+                            o.display, o.view},
+        shipped_ocio_config());
     display_pattern.emplace(display_out);
     if (job.frames.size() > 1 && !display_pattern->is_sequence())
       throw Error(Exit::usage,
@@ -272,8 +272,8 @@ void run(const RunOptions& o) {
                 : compute_ao_frame(g, cam, p, environment ? &*environment : nullptr);
       const auto t_compute = Clock::now();
       if (rep.cut) {
-        const std::string line =
-            "hbil: frame " + std::to_string(frame) + ": cut (" + rep.cut_reason + "), history dropped";
+        const std::string line = "hbil: frame " + std::to_string(frame) + ": cut (" +
+                                 rep.cut_reason + "), history dropped";
         if (!o.quiet) std::cerr << (tty ? "\r\033[K" : "") << line << "\n";
       }
       if (preroll) {
@@ -386,7 +386,8 @@ void add_run(CLI::App& app) {
   cmd->add_option("--view", o->view,
                   "OCIO view (default: the display's default, Standard in the shipped one)");
   cmd->add_option("--input-space", o->input_space,
-                  "OCIO colour space of the pixels (default: the preset's input_space, else the scene_linear role)");
+                  "OCIO colour space of the pixels (default: the preset's input_space, else the "
+                  "scene_linear role)");
   cmd->add_option("--ocio-config", o->ocio_config,
                   "OCIO config file; default $OCIO, else the config shipped with hbil "
                   "(presets/ocio/hbil.ocio)");

@@ -90,8 +90,8 @@ HorizonImage search_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& 
   return h;
 }
 
-AoFrame assemble_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& cam,
-                       const Params& p, const HorizonImage& h, const SH9* environment) {
+AoFrame assemble_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& cam, const Params& p,
+                       const HorizonImage& h, const SH9* environment) {
   const std::vector<Vec3>& world_normal = g.normal;
   const bool gather = gathers(p);
   const bool far = p.wants("farfield") || (p.wants("composite") && environment);

@@ -61,8 +61,8 @@ HorizonImage search_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& 
                           const Params& p, const FrameInputs& in);
 // ao, cone and bent from h.ao, h.vis, h.bent (view space), and the colour outputs from
 // h.irradiance.
-AoFrame assemble_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& cam,
-                       const Params& p, const HorizonImage& h, const SH9* environment);
+AoFrame assemble_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& cam, const Params& p,
+                       const HorizonImage& h, const SH9* environment);
 
 // The same from an already prepared view-space G-buffer (used by tests and benchmarks).
 // `g` supplies the world normals and, for irradiance, the colour fields.

@@ -14,16 +14,16 @@ namespace hbil {
 // space). A field that was not read is empty: hbil reads only what the outputs need.
 struct GBuffer {
   int width = 0, height = 0;
-  std::vector<float> depth;    // planar view depth, world units
+  std::vector<float> depth;      // planar view depth, world units
   std::vector<float> backdepth;  // planar depth of the first back face behind it (optional)
-  std::vector<Vec3> normal;    // world space, pixel-filtered (may be shorter than 1)
-  std::vector<Vec3> position;  // world space
-  std::vector<float> alpha;    // coverage; 0 = background
-  std::vector<Vec3> diffcol;   // diffuse albedo (Blender DiffCol)
-  std::vector<Vec3> diffdir;   // direct diffuse irradiance / π (Blender DiffDir)
-  std::vector<Vec3> emit;      // emitted radiance (Blender Emit)
-  std::vector<Vec3> f0;        // reflectance at normal incidence (optional, HBIL eq. 19)
-  std::vector<float> metallic;  // metalness in [0, 1] (optional, used when f0 is absent)
+  std::vector<Vec3> normal;      // world space, pixel-filtered (may be shorter than 1)
+  std::vector<Vec3> position;    // world space
+  std::vector<float> alpha;      // coverage; 0 = background
+  std::vector<Vec3> diffcol;     // diffuse albedo (Blender DiffCol)
+  std::vector<Vec3> diffdir;     // direct diffuse irradiance / π (Blender DiffDir)
+  std::vector<Vec3> emit;        // emitted radiance (Blender Emit)
+  std::vector<Vec3> f0;          // reflectance at normal incidence (optional, HBIL eq. 19)
+  std::vector<float> metallic;   // metalness in [0, 1] (optional, used when f0 is absent)
   // Raster offset (du, dv) per pixel from its centre to where its surface was in the
   // previous frame (from Blender's Vector pass), 2 floats per pixel.
   std::vector<float> motion;

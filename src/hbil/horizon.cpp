@@ -21,7 +21,8 @@ constexpr float kGrazing = 0.1f;
 // π/32 = 0.098 rad; used for the extents of bitmask occluders.
 inline float fast_acos(float x) {
   const float a = std::fabs(x);
-  const float r = std::sqrt(1.f - a) * (1.5707288f + a * (-0.2121144f + a * (0.0742610f - 0.0187293f * a)));
+  const float r =
+      std::sqrt(1.f - a) * (1.5707288f + a * (-0.2121144f + a * (0.0742610f - 0.0187293f * a)));
   return x < 0.f ? kPi - r : r;
 }
 }  // namespace
@@ -190,9 +191,7 @@ PixelSums march_pixel(const SampleView& view, int i, int j, const Vec3& P, const
         const float dist = std::sqrt(dist2);
         const float theta_f = sign * std::acos(std::clamp(dot(d3, wo) / dist, -1.f, 1.f));
         // Light the sample sends towards P (eq. 18: L_d(x') over the band it covers).
-        auto radiance = [&] {
-          return view.radiance[k_s] * facing_weight(n_s, d3 / dist);
-        };
+        auto radiance = [&] { return view.radiance[k_s] * facing_weight(n_s, d3 / dist); };
         if (!c.bitmask) {
           // A rise of the horizon occludes, and is lit by, the band it sweeps (eq. 18).
           auto rise = [&](float& t0, float& t1, float& lo, float& hi) {
@@ -237,7 +236,8 @@ PixelSums march_pixel(const SampleView& view, int i, int j, const Vec3& P, const
             // far beyond itself as its predecessor is before it, never towards the
             // gather-only samples, so ao is the same with or without them.
             const bool last = k + 1 == (near ? c.steps : n_steps);
-            const float hi_o = last ? o + 0.5f * (o - o_prev) : 0.5f * (o + std::max(o_at(k + 1), o));
+            const float hi_o =
+                last ? o + 0.5f * (o - o_prev) : 0.5f * (o + std::max(o_at(k + 1), o));
             const float plane = dot(S, n_s);
             for (float oo : {lo_o, hi_o}) {
               const Vec3 r = ray_P + dv * (sign * oo) * float(view.stride);

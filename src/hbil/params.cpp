@@ -12,12 +12,23 @@ namespace hbil {
 using nlohmann::json;
 
 std::map<std::string, json> Params::default_passes() {
-  return {{"depth", "Depth"},       {"normal", "Normal"},     {"position", "Position"},
-          {"alpha", "Combined.A"},  {"diffcol", "DiffCol"},   {"diffdir", "DiffDir"},
-          {"emit", "Emit"},         {"env", "Env"},           {"glosscol", "GlossCol"},
-          {"glossdir", "GlossDir"}, {"glossind", "GlossInd"}, {"transcol", "TransCol"},
-          {"transdir", "TransDir"}, {"transind", "TransInd"}, {"backdepth", "BackFaces.Depth.Z"},
-          {"f0", ""},               {"metallic", ""},
+  return {{"depth", "Depth"},
+          {"normal", "Normal"},
+          {"position", "Position"},
+          {"alpha", "Combined.A"},
+          {"diffcol", "DiffCol"},
+          {"diffdir", "DiffDir"},
+          {"emit", "Emit"},
+          {"env", "Env"},
+          {"glosscol", "GlossCol"},
+          {"glossdir", "GlossDir"},
+          {"glossind", "GlossInd"},
+          {"transcol", "TransCol"},
+          {"transdir", "TransDir"},
+          {"transind", "TransInd"},
+          {"backdepth", "BackFaces.Depth.Z"},
+          {"f0", ""},
+          {"metallic", ""},
           {"vector", "Vector"}};
 }
 
@@ -96,14 +107,15 @@ const std::vector<ParamInfo>& params_table() {
 
 const std::vector<std::string>& gbuffer_fields() {
   static const std::vector<std::string> f = {
-      "depth", "normal",   "position", "alpha",    "diffcol",  "diffdir",  "emit",
-      "env",   "glosscol", "glossdir", "glossind", "transcol", "transdir", "transind", "backdepth", "f0", "metallic", "vector"};
+      "depth",    "normal",   "position",  "alpha",    "diffcol",  "diffdir",
+      "emit",     "env",      "glosscol",  "glossdir", "glossind", "transcol",
+      "transdir", "transind", "backdepth", "f0",       "metallic", "vector"};
   return f;
 }
 
 const std::vector<std::string>& known_outputs() {
-  static const std::vector<std::string> o = {"ao",       "bentcone", "irradiance",
-                                             "indirect", "farfield", "composite", "history"};
+  static const std::vector<std::string> o = {"ao",       "bentcone",  "irradiance", "indirect",
+                                             "farfield", "composite", "history"};
   return o;
 }
 
@@ -200,8 +212,8 @@ Params params_from_json(const json& j, const std::string& where, Params p) {
       p.method = v.get<std::string>();
     } else if (key == "reprojection") {
       if (!v.is_string())
-        fail(where, "key 'reprojection' must be \"auto\", \"scatter\" or \"vector\", got " +
-                        v.dump());
+        fail(where,
+             "key 'reprojection' must be \"auto\", \"scatter\" or \"vector\", got " + v.dump());
       p.reprojection = v.get<std::string>();
     } else if (key == "environment") {
       if (!v.is_string())
@@ -241,9 +253,8 @@ Params params_from_json(const json& j, const std::string& where, Params p) {
     } else {
       std::vector<std::string> keys;
       for (const auto& i : params_table()) keys.push_back(i.key);
-      keys.insert(keys.end(),
-                  {"method", "reprojection", "environment", "view_layer", "input_space", "passes",
-                   "outputs"});
+      keys.insert(keys.end(), {"method", "reprojection", "environment", "view_layer", "input_space",
+                               "passes", "outputs"});
       fail(where, "unknown key '" + key + "' (known: " + allowed_list(keys) + ")");
     }
   }
@@ -280,8 +291,7 @@ void validate(const Params& p, const std::string& where) {
   for (const auto& o : p.outputs) {
     const auto& k = known_outputs();
     if (o != "auto" && std::find(k.begin(), k.end(), o) == k.end())
-      fail(where, "unknown output '" + o + "' in 'outputs' (known: auto, " + allowed_list(k) +
-                      ")");
+      fail(where, "unknown output '" + o + "' in 'outputs' (known: auto, " + allowed_list(k) + ")");
   }
 }
 

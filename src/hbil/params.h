@@ -34,23 +34,24 @@ struct Params {
   int bounces = 1;                 // in-frame bounces of indirect light (1 = one bounce)
   // gather_radius, gather_steps: the best indirect error against the samples' 1-bounce Cycles
   // references (README "Indirect light"): 4 m reach, 16 more samples per side.
-  double gather_radius = 4.0;      // irradiance gather reach, world units (<= radius: radius)
-  int gather_steps = 16;           // gather-only samples per side beyond radius
-  std::string environment;         // far field: "" (off), equirect EXR path, or "rgb:r,g,b"
-  bool ao_multibounce = false;     // ao as RGB with the multi-bounce fit (improved-AO eq. 12)
+  double gather_radius = 4.0;   // irradiance gather reach, world units (<= radius: radius)
+  int gather_steps = 16;        // gather-only samples per side beyond radius
+  std::string environment;      // far field: "" (off), equirect EXR path, or "rgb:r,g,b"
+  bool ao_multibounce = false;  // ao as RGB with the multi-bounce fit (improved-AO eq. 12)
 
   // --- Temporal chain (HBIL §2.3.1 eq. 17, §3.2, §3.3): across the frames of one run ---
-  bool temporal = true;             // reprojection, radiance feedback, accumulation, rotation
-  std::string reprojection = "auto";  // "auto" (vector when present, else scatter), "scatter", "vector"
-  bool feedback = true;             // gather last frame's indirect light too (a bounce per frame)
-  bool push_pull = true;            // fill disocclusions of the feedback from their surroundings
-  double history_weight = 0.9;      // exponential blend: weight of the history once converged
-  int history_max = 16;             // history length cap (frames); 1/n blend until then
+  bool temporal = true;  // reprojection, radiance feedback, accumulation, rotation
+  std::string reprojection =
+      "auto";                   // "auto" (vector when present, else scatter), "scatter", "vector"
+  bool feedback = true;         // gather last frame's indirect light too (a bounce per frame)
+  bool push_pull = true;        // fill disocclusions of the feedback from their surroundings
+  double history_weight = 0.9;  // exponential blend: weight of the history once converged
+  int history_max = 16;         // history length cap (frames); 1/n blend until then
   double history_depth_tolerance = 0.05;  // relative depth mismatch that rejects history
-  double history_normal_cos = 0.8;  // cosine between normals below which history is rejected
-  double cut_rejected = 0.6;        // a frame whose history is rejected on more pixels is a cut
-  double cut_camera_jump = 0.5;     // camera move / median depth beyond which a frame is a cut
-  double cut_camera_angle = 45;     // camera rotation (degrees) beyond which a frame is a cut
+  double history_normal_cos = 0.8;        // cosine between normals below which history is rejected
+  double cut_rejected = 0.6;     // a frame whose history is rejected on more pixels is a cut
+  double cut_camera_jump = 0.5;  // camera move / median depth beyond which a frame is a cut
+  double cut_camera_angle = 45;  // camera rotation (degrees) beyond which a frame is a cut
 
   // --- Input ---
   double background_depth = 1e9;  // depth >= this (Blender: 1e10) is background

@@ -71,8 +71,7 @@ AoFrame TemporalChain::process(const GBuffer& g, const Camera& cam, int frame, b
   Reprojected r;
   bool history = has_history_ && !cut;
   if (history) {
-    const ReprojectTolerance tol{float(p_.history_depth_tolerance),
-                                 float(p_.history_normal_cos)};
+    const ReprojectTolerance tol{float(p_.history_depth_tolerance), float(p_.history_normal_cos)};
     // Blender's Vector points at frame N−1: "auto" scatters when the history is another frame.
     const bool vector = p_.reprojection == "vector" ||
                         (p_.reprojection == "auto" && !g.motion.empty() && frame == frame_ + 1);
@@ -140,8 +139,8 @@ AoFrame TemporalChain::process(const GBuffer& g, const Camera& cam, int frame, b
         h.ao[i] = mix(hv[3], h.ao[i]);
         h.vis[i] = mix(hv[4], h.vis[i]);
         const Vec3 b_old = Vec3(cam.world_dir_to_view(Vec3d(Vec3{hv[5], hv[6], hv[7]})));
-        h.bent[i] = Vec3{mix(b_old.x, h.bent[i].x), mix(b_old.y, h.bent[i].y),
-                         mix(b_old.z, h.bent[i].z)};
+        h.bent[i] =
+            Vec3{mix(b_old.x, h.bent[i].x), mix(b_old.y, h.bent[i].y), mix(b_old.z, h.bent[i].z)};
       }
       float* o = &next[kChannels * i];
       if (has_e) o[0] = h.irradiance[i].x, o[1] = h.irradiance[i].y, o[2] = h.irradiance[i].z;

@@ -36,8 +36,8 @@ namespace hbil {
 // What happened to one frame, for the log.
 struct TemporalReport {
   bool cut = false;
-  std::string cut_reason;   // "given", or what was detected; "" when no cut
-  bool first = false;       // no history before this frame (first frame of the run)
+  std::string cut_reason;    // "given", or what was detected; "" when no cut
+  bool first = false;        // no history before this frame (first frame of the run)
   std::string reprojection;  // "scatter" or "vector" ("" without history)
   double history = 0;        // fraction of geometry pixels with accepted history
   double filled = 0;         // fraction filled by push/pull (feedback only)
@@ -61,10 +61,10 @@ class TemporalChain {
  private:
   Params p_;
   bool has_history_ = false;
-  ViewGBuffer view_;           // the history's view-space G-buffer
-  Camera cam_;                 // and camera
-  int frame_ = 0;              // and frame number
-  std::vector<float> data_;    // kChannels per pixel
+  ViewGBuffer view_;         // the history's view-space G-buffer
+  Camera cam_;               // and camera
+  int frame_ = 0;            // and frame number
+  std::vector<float> data_;  // kChannels per pixel
 };
 
 }  // namespace hbil

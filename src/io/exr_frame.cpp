@@ -15,8 +15,7 @@ using nlohmann::json;
 
 const std::vector<std::string>& field_components(const std::string& field) {
   static const std::vector<std::string> depth = {"Z"}, xyz = {"X", "Y", "Z"}, alpha = {"A"},
-                                        rgb = {"R", "G", "B"}, value = {"X"},
-                                        motion = {"X", "Y"};
+                                        rgb = {"R", "G", "B"}, value = {"X"}, motion = {"X", "Y"};
   if (field == "depth" || field == "backdepth") return depth;
   if (field == "normal" || field == "position") return xyz;
   if (field == "alpha") return alpha;
@@ -178,8 +177,7 @@ std::vector<std::string> fields_needed(const InputFrame& f, const Params& reques
   }
   // HBIL eq. 19: the receiver's (1 − F0) on the light it reflects diffusely, from F0 or else
   // from metallic, when a preset maps one.
-  if (p.wants("irradiance") || p.wants("indirect") || p.wants("composite") ||
-      p.wants("farfield")) {
+  if (p.wants("irradiance") || p.wants("indirect") || p.wants("composite") || p.wants("farfield")) {
     if (f.has("f0"))
       need.push_back("f0");
     else if (f.has("metallic"))
