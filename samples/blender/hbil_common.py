@@ -228,6 +228,16 @@ def smooth_fcurves(ob, interpolation='BEZIER'):
                 kp.interpolation = interpolation
 
 
+def hard_cut(ob, last_frame):
+    """Linear keys everywhere, but the key at `last_frame` holds until the next key: the
+    camera jumps there in one frame (a hard cut)."""
+    smooth_fcurves(ob, 'LINEAR')
+    for fc in ob.animation_data.action.fcurves:
+        for kp in fc.keyframe_points:
+            if int(round(kp.co[0])) == last_frame:
+                kp.interpolation = 'CONSTANT'
+
+
 # --------------------------------------------------------------------------- #
 # render configuration
 # --------------------------------------------------------------------------- #

@@ -39,12 +39,7 @@ def build(scene):
           rotation_euler=(math.radians(72.0), 0.0, math.radians(105.0)))
     H.key(cam, 6, location=(1.55, 1.05, 1.65),
           rotation_euler=(math.radians(73.0), 0.0, math.radians(108.0)))
-    H.smooth_fcurves(cam, 'LINEAR')
-    # Hold frame 3's pose until the jump at frame 4.
-    for fc in cam.animation_data.action.fcurves:
-        for kp in fc.keyframe_points:
-            if int(round(kp.co[0])) == 3:
-                kp.interpolation = 'CONSTANT'
+    H.hard_cut(cam, 3)  # frame 3's pose holds until the jump at frame 4
 
 
 if __name__ == "__main__":

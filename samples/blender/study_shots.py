@@ -42,11 +42,7 @@ def build(scene):
     pose(cam, 6, (1.2, -2.5, 1.50), 16.0)
     pose(cam, 7, (-2.0, 1.5, 1.70), -123.0, 74.0)
     pose(cam, 12, (-1.9, 1.3, 1.65), -120.0, 74.0)
-    H.smooth_fcurves(cam, 'LINEAR')
-    for fc in cam.animation_data.action.fcurves:
-        for kp in fc.keyframe_points:
-            if int(round(kp.co[0])) == 6:
-                kp.interpolation = 'CONSTANT'
+    H.hard_cut(cam, 6)  # frame 6's pose holds until the jump at frame 7
 
 
 if __name__ == "__main__":
