@@ -7,6 +7,7 @@
 #       moves rendered with samples/blender/study_shots.py (--shot move, frames 1-16; --shot cut,
 #       frames 1-12), which nothing was tuned on
 #   SKIP_HD=1 bench/measure.sh            skip the 1920x1080 timings
+#   ONLY_POVRAY=1 bench/measure.sh        only the POV-Ray table
 # Every accuracy figure is `hbil compare` (RMSE, mean error, PSNR with peak 1, over the
 # non-background pixels of all frames); every time is the "s per frame" of `hbil run`'s
 # summary line (reading, camera, computing, writing; display PNGs off).
@@ -31,6 +32,39 @@ cmp() {
 print("%.4f / %+.4f / %.2f" % (o["rmse"], o["mean_error"], o["psnr"]))'
 }
 psnr() { sed 's|.* / ||' <<<"$1"; }
+
+# POV-Ray sample (samples/povray_room): the committed passes imported twice, with the
+# 3-bounce radiosity reference and with the 1-bounce one (bounce1/).
+povray_table() {
+  pov=samples/povray_room
+  "$hbil" import-povray -q "$pov/passes" -o "$tmp/pov/frame_####.exr"
+  "$hbil" import-povray -q "$pov/passes" --reference-dir "$pov/bounce1" -o "$tmp/pov1/frame_####.exr"
+  echo
+  echo "POV-Ray room (samples/povray_room, 6 frames), indirect against the radiosity"
+  echo "DiffCol*DiffInd with 1 and with 3 bounces, composite against the 3-bounce Combined:"
+  echo
+  echo "| run | indirect vs 1 bounce RMSE / mean / PSNR | indirect vs 3 bounces PSNR | composite RMSE / mean / PSNR | s/frame |"
+  echo "|---|---|---|---|---|"
+  for cfg in "temporal chain (default)|" \
+    "single frames, bitmask, back-face thickness|--set temporal=false" \
+    "single frames, bitmask, constant thickness 0.4|--set temporal=false --set passes.backdepth=\"\"" \
+    "single frames, horizon|--set temporal=false --set method=horizon" \
+    "temporal chain, 2 in-frame bounces|--set bounces=2" \
+    "temporal chain, 3 in-frame bounces|--set bounces=3"; do
+    label=${cfg%%|*} args=${cfg#*|}
+    name="pov-${#label}-${#args}"
+    # shellcheck disable=SC2086
+    spf=$(eval run "$name" "'$tmp/pov/frame_####.exr'" $args)
+    i1=$(cmp "$name" "$tmp/pov1/frame_####.exr" indirect 'DiffCol*DiffInd')
+    i3=$(cmp "$name" "$tmp/pov/frame_####.exr" indirect 'DiffCol*DiffInd')
+    c=$(cmp "$name" "$tmp/pov/frame_####.exr" composite Combined)
+    echo "| $label | $i1 | $(psnr "$i3") | $c | $spf |"
+  done
+}
+if [ -n "${ONLY_POVRAY:-}" ]; then
+  povray_table
+  exit 0
+fi
 
 echo "Single frames (--set temporal=false), AO and bent cones only (outputs [\"ao\",\"bentcone\"]),"
 echo "ao against the Cycles AO pass:"
@@ -90,6 +124,8 @@ for scene in courtyard room_poles; do
       "$(cmp "b-$scene-$b" "$in" composite Combined) | $spf |"
   done
 done
+
+povray_table
 
 # The temporal chain (the default) against single frames on the camera moves.
 py=${PYTHON:-/usr/bin/python3}  # with OpenImageIO and numpy (python3-openimageio)

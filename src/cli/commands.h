@@ -28,5 +28,6 @@ void add_run(CLI::App& app);
 void add_info(CLI::App& app);
 void add_compare(CLI::App& app);
 void add_preset(CLI::App& app);
+void add_import_povray(CLI::App& app);
 
 }  // namespace hbil::cli

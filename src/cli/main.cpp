@@ -17,6 +17,7 @@ int main(int argc, char** argv) {
   hbil::cli::add_info(app);
   hbil::cli::add_compare(app);
   hbil::cli::add_preset(app);
+  hbil::cli::add_import_povray(app);
   // OIIO's own thread pool is not needed: hbil parallelises with TBB.
   // OIIO::attribute("threads", 1);
   try {

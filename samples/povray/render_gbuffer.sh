@@ -1,0 +1,86 @@
+#!/usr/bin/env bash
+# render_gbuffer.sh: renders a POV-Ray 3.7 scene that uses hbil.inc into the passes hbil
+# needs, one POV-Ray render per pass, and merges them with `hbil import-povray` into one
+# Blender-like multilayer EXR per frame (OUTDIR/frame_####.exr). Then: hbil run.
+#
+#   render_gbuffer.sh [options] SCENE.pov OUTDIR
+#     --frames A-B     frames to render (default 1-1); the scene sees frame_number, and clock
+#                      runs 0..1 over A..B (POV-Ray's default)
+#     --size WxH       resolution (default 640x360)
+#     --reference      also render the radiosity reference (pass 7: Combined and DiffInd)
+#     --bounces N      radiosity bounces of the reference (default 3)
+#     --count N        radiosity rays per sample of the reference (default 1000)
+#     --passes LIST    comma-separated subset of depth,normal,albedo,emit,direct,backfaces
+#                      (default: all; depth and normal are always rendered)
+#     --hbil PATH      the hbil binary (default: hbil on PATH, else build/hbil of this tree)
+#     --no-import      render the passes only (OUTDIR/passes)
+# Passes and POV-Ray's logs go to OUTDIR/passes; the scene's folder and this kit's folder
+# are on POV-Ray's library path. Every pass is rendered without anti-aliasing, so each
+# pixel is one ray through its centre and the passes agree pixel for pixel.
+set -euo pipefail
+kit=$(cd "$(dirname "$0")" && pwd)
+frames=1-1 size=640x360 reference=0 bounces=3 count=1000 hbil="" do_import=1
+passes=depth,normal,albedo,emit,direct,backfaces
+args=()
+usage() { sed -n '2,20p' "$0" | sed 's/^# \{0,1\}//'; exit 2; }
+while (($#)); do
+  case "$1" in
+    --frames) frames=$2; shift 2 ;;
+    --size) size=$2; shift 2 ;;
+    --reference) reference=1; shift ;;
+    --bounces) bounces=$2; shift 2 ;;
+    --count) count=$2; shift 2 ;;
+    --passes) passes=$2; shift 2 ;;
+    --hbil) hbil=$2; shift 2 ;;
+    --no-import) do_import=0; shift ;;
+    -h|--help) usage ;;
+    -*) echo "render_gbuffer.sh: unknown option $1" >&2; exit 2 ;;
+    *) args+=("$1"); shift ;;
+  esac
+done
+((${#args[@]} == 2)) || usage
+[[ -f ${args[0]} ]] || { echo "render_gbuffer.sh: ${args[0]}: no such scene file" >&2; exit 3; }
+scene=$(realpath "${args[0]}") out=${args[1]}
+[[ $frames =~ ^([0-9]+)-([0-9]+)$ ]] || { echo "render_gbuffer.sh: --frames A-B, got $frames" >&2; exit 2; }
+first=${BASH_REMATCH[1]} last=${BASH_REMATCH[2]}
+[[ $size =~ ^([0-9]+)x([0-9]+)$ ]] || { echo "render_gbuffer.sh: --size WxH, got $size" >&2; exit 2; }
+width=${BASH_REMATCH[1]} height=${BASH_REMATCH[2]}
+command -v povray >/dev/null || { echo "render_gbuffer.sh: povray not found (apt-get install povray)" >&2; exit 3; }
+if ((do_import)) && [[ -z $hbil ]]; then
+  hbil=$(command -v hbil || true)
+  [[ -n $hbil ]] || hbil=$kit/../../build/hbil
+  [[ -x $hbil ]] || { echo "render_gbuffer.sh: no hbil binary (use --hbil PATH)" >&2; exit 3; }
+fi
+
+mkdir -p "$out/passes"
+passdir=$(realpath "$out/passes")
+declare -A number=([depth]=1 [normal]=2 [albedo]=3 [emit]=4 [direct]=5 [backfaces]=6 [reference]=7)
+list=(depth normal)
+IFS=, read -ra wanted <<<"$passes"
+for p in "${wanted[@]}"; do
+  [[ -n ${number[$p]:-} && $p != reference ]] || { echo "render_gbuffer.sh: unknown pass $p" >&2; exit 2; }
+  [[ $p == depth || $p == normal ]] || list+=("$p")
+done
+((reference)) && list+=(reference)
+
+anim=(+KFI"$first" +KFF"$last")
+# A single frame is rendered as frame A of A..A+1, so that POV-Ray still animates: the scene
+# sees frame_number = A (clock 0) and the files carry the frame number.
+((first == last)) && anim=(+KFI"$first" +KFF"$((last + 1))" +SF"$first" +EF"$first")
+for p in "${list[@]}"; do
+  opts=(+I"$scene" +O"$passdir/$p.exr" +FE +W"$width" +H"$height" -A -D -V -GA +GF
+        Display=off +L"$(dirname "$scene")" +L"$kit" "${anim[@]}" Declare=HBIL_PASS="${number[$p]}")
+  [[ $p == depth ]] && opts+=(+UA)
+  [[ $p == reference ]] && opts+=(Declare=HBIL_Radiosity_Bounces="$bounces" Declare=HBIL_Radiosity_Count="$count")
+  start=$(date +%s.%N)
+  if ! (cd "$passdir" && povray "${opts[@]}") >"$passdir/povray_$p.log" 2>&1; then
+    tail -20 "$passdir/povray_$p.log" >&2
+    echo "render_gbuffer.sh: povray failed on pass $p (log: $passdir/povray_$p.log)" >&2
+    exit 1
+  fi
+  awk -v p="$p" -v n="${number[$p]}" -v f="$((last - first + 1))" -v s="$start" -v e="$(date +%s.%N)" \
+    -v size="${width}x$height" 'BEGIN { printf "render_gbuffer.sh: pass %d %-9s %s, %d frame(s), %.2f s per frame\n", n, p, size, f, (e - s) / f }' >&2
+done
+if ((do_import)); then
+  "$hbil" import-povray "$passdir" -o "$out/frame_####.exr" --frames "$first-$last"
+fi

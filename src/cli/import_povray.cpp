@@ -1,0 +1,121 @@
+// import_povray.cpp: `hbil import-povray PASSDIR -o PATTERN`: merges the passes that
+// samples/povray/render_gbuffer.sh rendered into one Blender-like multilayer EXR per frame
+// (see io/povray.h), so that `hbil run` reads a POV-Ray sequence as it reads a Cycles one.
+#include <OpenImageIO/imageio.h>
+
+#include <filesystem>
+#include <iostream>
+#include <set>
+
+#include "cli/commands.h"
+#include "hbil/error.h"
+#include "io/camera_io.h"
+#include "io/exr_output.h"
+#include "io/povray.h"
+#include "io/sequence.h"
+
+namespace hbil::cli {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct ImportOptions {
+  std::string passes;
+  std::string out;
+  std::string frames;
+  std::string reference_dir;
+  std::string view_layer = "ViewLayer";
+  bool quiet = false;
+};
+
+void write_frame(const std::string& temporary, const io::ImportedFrame& f,
+                 const std::string& pass_dir) {
+  OIIO::ImageSpec spec(f.width, f.height, int(f.channels.size()), OIIO::TypeDesc::FLOAT);
+  spec.channelnames = f.channels;
+  spec.alpha_channel = -1;
+  spec.attribute("compression", "zip");
+  spec.attribute("hbil:version", HBIL_VERSION);
+  spec.attribute("hbil:source", "POV-Ray passes in " + pass_dir + " (hbil import-povray)");
+  spec.attribute("hbil:camera", io::camera_json(f.camera));
+  io::set_camera_attributes(spec, f.camera);
+  auto out = OIIO::ImageOutput::create(temporary);
+  if (!out || !out->open(temporary, spec) ||
+      !out->write_image(OIIO::TypeDesc::FLOAT, f.pixels.data()) || !out->close())
+    throw Error(Exit::output,
+                temporary + ": cannot write: " + (out ? out->geterror() : OIIO::geterror()));
+}
+
+void import_povray(const ImportOptions& o) {
+  io::FramePattern out(o.out);
+  std::vector<io::PovrayFrameFiles> frames = io::find_povray_frames(o.passes, o.reference_dir);
+  if (!o.frames.empty()) {
+    const io::FrameRange r = io::parse_frame_range(o.frames);
+    std::vector<io::PovrayFrameFiles> kept;
+    for (auto& f : frames)
+      if (f.frame >= r.first && f.frame <= r.last) kept.push_back(std::move(f));
+    if (kept.empty()) throw Error(Exit::input, o.passes + ": no depth pass of frames " + o.frames);
+    frames = std::move(kept);
+  }
+  if (frames.size() > 1 && !out.is_sequence())
+    throw Error(Exit::usage, "-o " + o.out + ": " + std::to_string(frames.size()) +
+                                 " frames need a frame pattern (e.g. out/frame_####.exr)");
+
+  // Every frame waits as a hidden temporary until all succeeded (see run.cpp).
+  std::vector<std::pair<std::string, std::string>> done;
+  std::set<fs::path> created;
+  for (const auto& f : frames) {
+    fs::path dir = fs::absolute(fs::path(out.path(f.frame))).parent_path(), top;
+    for (; !dir.empty() && !fs::exists(dir) && dir != dir.parent_path(); dir = dir.parent_path())
+      top = dir;
+    if (!top.empty()) created.insert(top);
+  }
+  try {
+    for (const auto& f : frames) {
+      const io::ImportedFrame img = io::import_povray_frame(f, o.view_layer);
+      const std::string final_path = out.path(f.frame);
+      const std::string tmp = io::prepare_temporary(final_path, "pov");
+      done.emplace_back(tmp, final_path);
+      write_frame(tmp, img, o.passes);
+      if (!o.quiet) {
+        std::string layers;
+        for (const auto& l : img.layers) layers += (layers.empty() ? "" : ", ") + l;
+        std::cerr << "hbil: frame " << f.frame << " -> " << final_path << " (" << img.width << "x"
+                  << img.height << "): " << layers << "\n";
+      }
+    }
+    for (const auto& d : done) io::commit(d.first, d.second);
+  } catch (...) {
+    std::error_code ec;
+    for (const auto& d : done) fs::remove(d.first, ec);
+    for (const auto& dir : created) fs::remove_all(dir, ec);
+    throw;
+  }
+  if (!o.quiet)
+    std::cerr << "hbil: imported " << frames.size() << " frame(s); next: hbil run '" << o.out
+              << "' -o <output pattern>\n";
+}
+
+}  // namespace
+
+void add_import_povray(CLI::App& app) {
+  auto o = std::make_shared<ImportOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "import-povray",
+      "merge the passes rendered by samples/povray/render_gbuffer.sh into Blender-like "
+      "multilayer EXR frames");
+  cmd->add_option("PASSDIR", o->passes,
+                  "folder with depth<N>.exr, normal<N>.exr, ... and camera<N>.json")
+      ->required();
+  cmd->add_option("-o,--output", o->out, "output EXR frame pattern, e.g. shot/frame_####.exr")
+      ->required();
+  cmd->add_option("--frames", o->frames, "frame range A-B to import (default: all found)");
+  cmd->add_option("--reference-dir", o->reference_dir,
+                  "take reference<N>.exr from this folder instead (another radiosity render)");
+  cmd->add_option("--view-layer", o->view_layer, "view layer name of the written channels")
+      ->capture_default_str();
+  cmd->add_flag("-q,--quiet", o->quiet, "print errors only");
+  cmd->callback([o] { import_povray(*o); });
+}
+
+}  // namespace hbil::cli

@@ -1,0 +1,370 @@
+// povray.cpp: POV-Ray pass folders -> Blender-like G-buffer frames (see povray.h).
+#include "io/povray.h"
+
+#include <OpenImageIO/imageio.h>
+
+#include <algorithm>
+#include <cmath>
+#include <deque>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <regex>
+#include <sstream>
+
+#include "hbil/error.h"
+
+namespace hbil::io {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+const std::vector<std::string>& povray_passes() {
+  static const std::vector<std::string> p = {"depth",  "normal",    "albedo",   "emit",
+                                             "direct", "backfaces", "reference"};
+  return p;
+}
+
+namespace {
+
+constexpr float kBackgroundDepth = 1e10f;  // what Blender writes where nothing was hit
+
+[[noreturn]] void camera_error(const std::string& path, const std::string& msg) {
+  throw Error(Exit::camera, path + ": " + msg);
+}
+
+Vec3d read_vec(const json& j, const char* key, const std::string& path) {
+  auto it = j.find(key);
+  if (it == j.end()) camera_error(path, std::string("key \"") + key + "\" is missing");
+  if (!it->is_array() || it->size() != 3)
+    camera_error(path, std::string("key \"") + key + "\" must be an array of 3 numbers");
+  double v[3];
+  for (int i = 0; i < 3; ++i) {
+    if (!(*it)[i].is_number())
+      camera_error(path, std::string("key \"") + key + "\" must be an array of 3 numbers");
+    v[i] = (*it)[i].get<double>();
+    if (!std::isfinite(v[i])) camera_error(path, std::string("key \"") + key + "\" is not finite");
+  }
+  return {v[0], v[1], v[2]};
+}
+
+double read_num(const json& j, const char* key, const std::string& path) {
+  auto it = j.find(key);
+  if (it == j.end()) camera_error(path, std::string("key \"") + key + "\" is missing");
+  if (!it->is_number() || !std::isfinite(it->get<double>()))
+    camera_error(path, std::string("key \"") + key + "\" must be a finite number");
+  return it->get<double>();
+}
+
+// A pass image as float, `min_channels` or more channels. Errors name the file and frame.
+struct PassImage {
+  int width = 0, height = 0, nchannels = 0;
+  std::vector<float> data;
+  float at(size_t pixel, int c) const { return data[pixel * nchannels + c]; }
+};
+
+PassImage read_pass(const std::string& path, int frame, const std::string& pass, int min_channels,
+                    int width, int height) {
+  auto in = OIIO::ImageInput::open(path);
+  const std::string where = "frame " + std::to_string(frame) + " (" + path + "), " + pass + " pass";
+  if (!in) throw Error(Exit::input, where + ": cannot read: " + OIIO::geterror());
+  const OIIO::ImageSpec& spec = in->spec();
+  PassImage img;
+  img.width = spec.width;
+  img.height = spec.height;
+  img.nchannels = spec.nchannels;
+  if (img.width != width || img.height != height)
+    throw Error(Exit::bad_data, where + ": " + std::to_string(img.width) + "x" +
+                                    std::to_string(img.height) + " pixels, the camera file says " +
+                                    std::to_string(width) + "x" + std::to_string(height));
+  if (img.nchannels < min_channels)
+    throw Error(Exit::missing_pass, where + ": " + std::to_string(img.nchannels) +
+                                        " channels, needs " + std::to_string(min_channels) +
+                                        (min_channels == 4 ? " (render it with +UA)" : ""));
+  img.data.resize(size_t(width) * height * img.nchannels);
+  if (!in->read_image(0, 0, 0, img.nchannels, OIIO::TypeDesc::FLOAT, img.data.data()))
+    throw Error(Exit::input, where + ": cannot read pixels: " + in->geterror());
+  for (float v : img.data)
+    if (!std::isfinite(v))
+      throw Error(Exit::bad_data, where + ": holds a non-finite value (" + std::to_string(v) + ")");
+  return img;
+}
+
+}  // namespace
+
+PovrayCamera read_povray_camera(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw Error(Exit::input, path + ": cannot read the camera file");
+  json j;
+  try {
+    in >> j;
+  } catch (const json::exception& e) {
+    camera_error(path, std::string("not valid JSON: ") + e.what());
+  }
+  if (!j.is_object() || j.value("format", "") != "hbil-povray-camera-1")
+    camera_error(path, "key \"format\" must be \"hbil-povray-camera-1\"");
+  PovrayCamera c;
+  c.frame = int(read_num(j, "frame", path));
+  c.clock = read_num(j, "clock", path);
+  c.width = int(read_num(j, "width", path));
+  c.height = int(read_num(j, "height", path));
+  c.depth_range = read_num(j, "depth_range", path);
+  c.location = read_vec(j, "location", path);
+  c.direction = read_vec(j, "direction", path);
+  c.right = read_vec(j, "right", path);
+  c.up = read_vec(j, "up", path);
+  if (c.width <= 0 || c.height <= 0)
+    camera_error(path, "keys \"width\" and \"height\" must be > 0");
+  if (!(c.depth_range > 0)) camera_error(path, "key \"depth_range\" must be > 0");
+  const double ld = length(c.direction), lr = length(c.right), lu = length(c.up);
+  if (!(ld > 0 && lr > 0 && lu > 0))
+    camera_error(path, "\"direction\", \"right\" and \"up\" must not be zero");
+  const double tol = 1e-6;
+  if (std::abs(dot(c.direction, c.right)) > tol * ld * lr ||
+      std::abs(dot(c.direction, c.up)) > tol * ld * lu ||
+      std::abs(dot(c.right, c.up)) > tol * lr * lu)
+    camera_error(path, "\"direction\", \"right\" and \"up\" are not orthogonal");
+  // Square pixels: |right| / |up| = width / height.
+  if (std::abs(lr / lu - double(c.width) / c.height) > 1e-6 * lr / lu)
+    camera_error(path, "|right| / |up| is not width / height (pixels are not square)");
+  // POV-Ray draws +right to the right of the image and +up upwards when (right, up,
+  // direction) is left-handed in its space, which hbil.inc's cameras are.
+  if (dot(cross(c.right, c.up), c.direction) <= 0)
+    camera_error(path, "right x up does not point along direction (a mirrored camera)");
+  return c;
+}
+
+Camera camera_from_povray(const PovrayCamera& c, const std::string& source) {
+  Camera cam;
+  cam.width = c.width;
+  cam.height = c.height;
+  const double ld = length(c.direction), lr = length(c.right), lu = length(c.up);
+  cam.fx = c.width * ld / lr;
+  cam.fy = c.height * ld / lu;
+  cam.cx = 0.5 * c.width;
+  cam.cy = 0.5 * c.height;
+  // View axes (+x right, +y down, +z forward) as world directions.
+  const Vec3d ax = pov_to_world(c.right / lr), ay = pov_to_world(-(c.up / lu)),
+              az = pov_to_world(c.direction / ld);
+  const Vec3d rows[3] = {ax, ay, az};
+  for (int i = 0; i < 3; ++i) {
+    cam.R.m[i][0] = rows[i].x;
+    cam.R.m[i][1] = rows[i].y;
+    cam.R.m[i][2] = rows[i].z;
+  }
+  cam.t = -(cam.R * pov_to_world(c.location));
+  cam.source = source;
+  return cam;
+}
+
+double decode_povray_depth(float r, float g, float b, double range) {
+  const double coarse = std::round(double(r) * 2048), middle = std::round(double(g) * 2048);
+  return (coarse + (middle + double(b)) / 2048) / 2048 * range;
+}
+
+Vec3 decode_povray_normal(float sx, float sy, float sz) {
+  constexpr double kPi = 3.14159265358979323846;
+  // slope value s = 1 - angle / pi, so the component is cos(pi (1 - s)) = -cos(pi s).
+  const Vec3d pov(-std::cos(kPi * sx), -std::cos(kPi * sy), -std::cos(kPi * sz));
+  const double l = length(pov);
+  if (!(l > 0.5 && l < 1.5)) return {};
+  return Vec3(pov_to_world(pov / l));
+}
+
+namespace {
+
+// Calls fn(pass or "camera", frame, path) for every pass or camera file in `dir`.
+template <typename Fn>
+void scan_pass_folder(const std::string& dir, Fn fn) {
+  std::error_code ec;
+  fs::directory_iterator it(dir, ec);
+  if (ec) throw Error(Exit::input, dir + ": cannot read the pass folder: " + ec.message());
+  static const std::regex re(
+      "(depth|normal|albedo|emit|direct|backfaces|reference)([0-9]{0,9})\\.exr|"
+      "camera([0-9]{0,9})\\.json");
+  for (const auto& entry : it) {
+    const std::string name = entry.path().filename().string();
+    std::smatch m;
+    if (!std::regex_match(name, m, re)) continue;
+    const bool camera = m[1].length() == 0;
+    const std::string digits = camera ? m[3].str() : m[2].str();
+    fn(camera ? std::string("camera") : m[1].str(), digits.empty() ? 0 : std::stoi(digits),
+       entry.path().string());
+  }
+}
+
+}  // namespace
+
+std::vector<PovrayFrameFiles> find_povray_frames(const std::string& dir,
+                                                 const std::string& reference_dir) {
+  std::map<int, PovrayFrameFiles> frames;
+  scan_pass_folder(dir, [&](const std::string& pass, int f, const std::string& path) {
+    frames[f].frame = f;
+    if (pass == "camera")
+      frames[f].camera = path;
+    else if (reference_dir.empty() || pass != "reference")
+      frames[f].passes[pass] = path;
+  });
+  if (!reference_dir.empty())
+    scan_pass_folder(reference_dir, [&](const std::string& pass, int f, const std::string& path) {
+      if (pass == "reference" && frames.count(f)) frames[f].passes[pass] = path;
+    });
+  std::vector<PovrayFrameFiles> out;
+  for (auto& [f, files] : frames)
+    if (files.passes.count("depth")) out.push_back(std::move(files));
+  if (out.empty())
+    throw Error(Exit::input, dir +
+                                 ": no depth<frame>.exr in the folder (render_gbuffer.sh "
+                                 "writes depth, normal, ... and camera<frame>.json there)");
+  return out;
+}
+
+ImportedFrame import_povray_frame(const PovrayFrameFiles& files, const std::string& view_layer) {
+  const int frame = files.frame;
+  const std::string where_frame = "frame " + std::to_string(frame);
+  if (files.camera.empty())
+    throw Error(Exit::camera, where_frame + " (" + files.passes.at("depth") + "): no camera" +
+                                  std::to_string(frame) +
+                                  ".json beside it (hbil.inc writes it in the depth pass)");
+  if (!files.passes.count("normal"))
+    throw Error(Exit::missing_pass, where_frame + " (" + files.passes.at("depth") + "): no normal" +
+                                        std::to_string(frame) +
+                                        ".exr beside it (pass 2 of render_gbuffer.sh)");
+  const PovrayCamera pc = read_povray_camera(files.camera);
+  const int w = pc.width, h = pc.height;
+  const size_t n = size_t(w) * h;
+
+  ImportedFrame out;
+  out.width = w;
+  out.height = h;
+  out.camera = camera_from_povray(pc, "POV-Ray " + fs::path(files.camera).filename().string());
+
+  auto read = [&](const std::string& pass, int min_channels) {
+    return read_pass(files.passes.at(pass), frame, pass, min_channels, w, h);
+  };
+  const PassImage depth = read("depth", 4);
+  const PassImage normal = read("normal", 3);
+
+  // Each layer as planar float data first; interleaved at the end.
+  std::deque<std::pair<std::string, std::vector<float>>> planes;  // references stay valid
+  auto add = [&](const std::string& name) -> std::vector<float>& {
+    planes.emplace_back(name, std::vector<float>(n, 0.0f));
+    return planes.back().second;
+  };
+  const std::string L = view_layer.empty() ? "" : view_layer + ".";
+
+  std::vector<float> z(n), alpha(n);
+  std::vector<bool> hit(n);
+  for (size_t i = 0; i < n; ++i) {
+    // Depth 0 is no surface either: a scene's own opaque background{} hides the alpha.
+    hit[i] =
+        depth.at(i, 3) >= 0.5f && (depth.at(i, 0) > 0 || depth.at(i, 1) > 0 || depth.at(i, 2) > 0);
+    alpha[i] = hit[i] ? 1.0f : 0.0f;
+    z[i] = hit[i] ? float(decode_povray_depth(depth.at(i, 0), depth.at(i, 1), depth.at(i, 2),
+                                              pc.depth_range))
+                  : kBackgroundDepth;
+  }
+  add(L + "Depth.Z") = z;
+  out.layers.push_back("Depth");
+  {
+    auto& nx = add(L + "Normal.X");
+    auto& ny = add(L + "Normal.Y");
+    auto& nz = add(L + "Normal.Z");
+    const Vec3d centre = out.camera.centre();
+    for (int row = 0; row < h; ++row)
+      for (int col = 0; col < w; ++col) {
+        const size_t i = size_t(row) * w + col;
+        if (!hit[i]) continue;
+        Vec3 nn = decode_povray_normal(normal.at(i, 0), normal.at(i, 1), normal.at(i, 2));
+        // Towards the camera, as Cycles' Normal pass is (it flips back faces).
+        const Vec3d p = out.camera.view_to_world(out.camera.unproject(col + 0.5, row + 0.5, z[i]));
+        if (dot(Vec3d(nn), p - centre) > 0) nn = -nn;
+        nx[i] = nn.x;
+        ny[i] = nn.y;
+        nz[i] = nn.z;
+      }
+    out.layers.push_back("Normal");
+  }
+
+  auto add_rgb = [&](const std::string& pass, const PassImage& img, bool where_hit,
+                     bool where_background) {
+    auto& r = add(L + pass + ".R");
+    auto& g = add(L + pass + ".G");
+    auto& b = add(L + pass + ".B");
+    for (size_t i = 0; i < n; ++i) {
+      if (!(hit[i] ? where_hit : where_background)) continue;
+      r[i] = img.at(i, 0);
+      g[i] = img.at(i, 1);
+      b[i] = img.at(i, 2);
+    }
+    out.layers.push_back(pass);
+  };
+  std::vector<Vec3> diffcol(n), diffdir(n), emit_env(n);
+  auto as_vec = [n](const PassImage& img, std::vector<Vec3>& v) {
+    for (size_t i = 0; i < n; ++i) v[i] = {img.at(i, 0), img.at(i, 1), img.at(i, 2)};
+  };
+  if (files.passes.count("albedo")) {
+    const PassImage img = read("albedo", 3);
+    add_rgb("DiffCol", img, true, false);
+    as_vec(img, diffcol);
+  }
+  if (files.passes.count("direct")) {
+    const PassImage img = read("direct", 3);
+    add_rgb("DiffDir", img, true, false);
+    as_vec(img, diffdir);
+  }
+  if (files.passes.count("emit")) {
+    const PassImage img = read("emit", 3);
+    add_rgb("Emit", img, true, false);
+    add_rgb("Env", img, false, true);
+    as_vec(img, emit_env);
+  }
+  const bool reference = files.passes.count("reference") > 0;
+  {
+    PassImage ref;
+    if (reference) ref = read("reference", 3);
+    if (reference) {
+      add_rgb("Combined", ref, true, true);
+      out.layers.back() = "Combined (reference)";
+    }
+    add(L + "Combined.A") = alpha;
+    if (reference && files.passes.count("albedo") && files.passes.count("direct") &&
+        files.passes.count("emit")) {
+      // Cycles' DiffInd is the indirect diffuse light divided by DiffCol.
+      auto& r = add(L + "DiffInd.R");
+      auto& g = add(L + "DiffInd.G");
+      auto& b = add(L + "DiffInd.B");
+      std::vector<float>* ch[3] = {&r, &g, &b};
+      for (size_t i = 0; i < n; ++i) {
+        if (!hit[i]) continue;
+        for (int c = 0; c < 3; ++c) {
+          const float col = diffcol[i][c];
+          if (!(col > 0)) continue;
+          const float indirect = ref.at(i, c) - col * diffdir[i][c] - emit_env[i][c];
+          (*ch[c])[i] = std::max(indirect, 0.0f) / col;
+        }
+      }
+      out.layers.push_back("DiffInd");
+    }
+  }
+  if (files.passes.count("backfaces")) {
+    const PassImage img = read("backfaces", 3);
+    auto& zb = add("BackFaces.Depth.Z");
+    for (size_t i = 0; i < n; ++i) {
+      const double d =
+          decode_povray_depth(img.at(i, 0), img.at(i, 1), img.at(i, 2), pc.depth_range);
+      zb[i] = (hit[i] && d > 0) ? float(d) : kBackgroundDepth;
+    }
+    out.layers.push_back("BackFaces.Depth");
+  }
+
+  out.channels.reserve(planes.size());
+  for (const auto& p : planes) out.channels.push_back(p.first);
+  const size_t nc = planes.size();
+  out.pixels.resize(n * nc);
+  for (size_t c = 0; c < nc; ++c)
+    for (size_t i = 0; i < n; ++i) out.pixels[i * nc + c] = planes[c].second[i];
+  return out;
+}
+
+}  // namespace hbil::io
