@@ -7,7 +7,9 @@
 #       moves rendered with samples/blender/study_shots.py (--shot move, frames 1-16; --shot cut,
 #       frames 1-12), which nothing was tuned on
 #   SKIP_HD=1 bench/measure.sh            skip the 1920x1080 timings
-#   ONLY_POVRAY=1 bench/measure.sh        only the POV-Ray table
+#   ONLY_POVRAY=1 bench/measure.sh        only the POV-Ray tables
+#   HELDOUT_POV=/tmp/pov_study bench/measure.sh   also the held-out POV-Ray scene
+#       (samples/povray/study.pov, rendered as its header says)
 # Every accuracy figure is `hbil compare` (RMSE, mean error, PSNR with peak 1, over the
 # non-background pixels of all frames); every time is the "s per frame" of `hbil run`'s
 # summary line (reading, camera, computing, writing; display PNGs off).
@@ -60,6 +62,27 @@ povray_table() {
     c=$(cmp "$name" "$tmp/pov/frame_####.exr" composite Combined)
     echo "| $label | $i1 | $(psnr "$i3") | $c | $spf |"
   done
+  # A scene of a user's own: samples/povray/study.pov, never used for tuning, rendered as its
+  # header says into $HELDOUT_POV (with --reference) and ${HELDOUT_POV}_b1 (--bounces 1).
+  if [ -n "${HELDOUT_POV:-}" ]; then
+    "$hbil" import-povray -q "$HELDOUT_POV/passes" --reference-dir "${HELDOUT_POV}_b1/passes" \
+      -o "$tmp/povs1/frame_####.exr"
+    echo
+    echo "Held-out POV-Ray scene $HELDOUT_POV (samples/povray/study.pov, 8 frames, 320x180):"
+    echo
+    echo "| run | indirect vs 1 bounce RMSE / mean / PSNR | indirect vs 3 bounces PSNR | composite RMSE / mean / PSNR | s/frame |"
+    echo "|---|---|---|---|---|"
+    for cfg in "temporal chain (default)|" "single frames|--set temporal=false"; do
+      label=${cfg%%|*} args=${cfg#*|}
+      name="povs-${#args}"
+      # shellcheck disable=SC2086
+      spf=$(eval run "$name" "'$HELDOUT_POV/frame_####.exr'" $args)
+      i1=$(cmp "$name" "$tmp/povs1/frame_####.exr" indirect 'DiffCol*DiffInd')
+      i3=$(cmp "$name" "$HELDOUT_POV/frame_####.exr" indirect 'DiffCol*DiffInd')
+      c=$(cmp "$name" "$HELDOUT_POV/frame_####.exr" composite Combined)
+      echo "| $label | $i1 | $(psnr "$i3") | $c | $spf |"
+    done
+  fi
 }
 if [ -n "${ONLY_POVRAY:-}" ]; then
   povray_table

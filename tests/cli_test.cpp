@@ -17,6 +17,7 @@
 #include <limits>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <regex>
 #include <string>
 #include <vector>
 
@@ -537,6 +538,27 @@ TEST_F(Cli, PresetDumpAppliesSet) {
 
   EXPECT_EQ(hbil("preset").code, int(Exit::usage));
   EXPECT_EQ(hbil("preset --dump --set radius=0").code, int(Exit::preset));
+}
+
+// The man page documents every option of every command: each "--name" that a command's
+// --help lists appears in man/hbil.1 (as \-\-name).
+TEST_F(Cli, ManPageDocumentsEveryOption) {
+  const std::string man = test::read_text(fs::path(HBIL_SOURCE_DIR) / "man/hbil.1");
+  const std::regex option("--([a-z][a-z0-9-]*)");
+  for (const char* command : {"run", "info", "compare", "preset", "import-povray"}) {
+    const RunResult r = hbil(std::string(command) + " --help");
+    ASSERT_EQ(r.code, 0) << command;
+    int found = 0;
+    for (std::sregex_iterator it(r.out.begin(), r.out.end(), option), end; it != end; ++it) {
+      const std::string name = (*it)[1].str();
+      if (name == "help") continue;
+      std::string escaped = "\\-\\-";
+      for (char c : name) escaped += c == '-' ? std::string("\\-") : std::string(1, c);
+      EXPECT_TRUE(test::contains(man, escaped)) << command << " --" << name;
+      ++found;
+    }
+    EXPECT_GT(found, 0) << command;
+  }
 }
 
 }  // namespace

@@ -174,7 +174,7 @@ TEST(PovrayImport, AnalyticSceneDepthNormalsAndCameraAreExact) {
   EXPECT_LT(max_pos, 3e-7);
   std::cout << "analytic scene: " << compared << " pixels, max relative depth error "
             << max_rel_depth << ", max normal error " << max_angle * 180 / 3.14159265358979
-            << " deg\n";
+            << " deg, max position error " << max_pos << " of the depth\n";
 }
 
 TEST(PovrayImport, CameraFileErrorsNameTheFileAndKey) {
@@ -238,6 +238,39 @@ TEST(PovrayImport, RoomSampleHasEveryLayerAndTheScenesCamera) {
   }
 }
 
+// tests/data/povray_room_preview/reference1.exr is room.pov frame 1 rendered as a plain
+// POV-Ray render (HBIL_PASS not declared: the scene lit, radiosity off), with
+//   povray +Isamples/povray/room.pov +O.../reference.exr +FE +W256 +H144 -A -D \
+//     +Lsamples/povray +KFI1 +KFF2 +SF1 +EF1
+// The passes must recompose it: Combined = DiffCol x DiffDir + Emit + Env, to the rounding
+// of three half floats (2^-11 relative each; measured 7.2e-4 at most).
+TEST(PovrayImport, PassesRecomposePovRaysOwnRender) {
+  io::PovrayFrameFiles files = io::find_povray_frames(kRoom + "/passes").front();
+  ASSERT_EQ(files.frame, 1);
+  files.passes["reference"] = test::kSourceDir + "/tests/data/povray_room_preview/reference1.exr";
+  const io::ImportedFrame f = io::import_povray_frame(files);
+  const size_t nc = f.channels.size();
+  auto channel = [&](const std::string& pass) {
+    for (size_t c = 0; c < nc; ++c)
+      if (f.channels[c] == "ViewLayer." + pass + ".R") return c;
+    ADD_FAILURE() << "no " << pass;
+    return size_t(0);
+  };
+  const size_t comb = channel("Combined"), col = channel("DiffCol"), dir = channel("DiffDir"),
+               emit = channel("Emit"), env = channel("Env");
+  double worst = 0, sum = 0;
+  for (size_t i = 0; i < size_t(f.width) * f.height; ++i)
+    for (size_t k = 0; k < 3; ++k) {
+      const float* px = &f.pixels[i * nc];
+      const double want = px[comb + k];
+      const double got = double(px[col + k]) * px[dir + k] + px[emit + k] + px[env + k];
+      worst = std::max(worst, std::abs(got - want) / std::max(want, 1e-3));
+      sum += want;
+    }
+  EXPECT_GT(sum / (3.0 * f.width * f.height), 0.03);  // not a black image
+  EXPECT_LT(worst, 1e-3);
+}
+
 TEST(PovrayImport, BadPassesFailWithTheirExitCodeAndWriteNothing) {
   TempDir dir(test::test_name());
   fs::create_directories(dir / "passes");
@@ -266,6 +299,16 @@ TEST(PovrayImport, BadPassesFailWithTheirExitCodeAndWriteNothing) {
   r = test::run_hbil("import-povray " + q(dir / "passes") + out, dir.path());
   EXPECT_EQ(r.code, int(Exit::camera)) << r.err;
   EXPECT_TRUE(test::contains(r.err, "camera1.json")) << r.err;
+  // A pass that another frame has: missing pass, naming the frame.
+  fs::copy_file(kAnalytic + "/camera1.json", dir / "passes/camera1.json");
+  for (const char* f : {"depth", "normal"})
+    fs::copy_file(kAnalytic + "/" + f + "1.exr", dir / (std::string("passes/") + f + "2.exr"));
+  fs::copy_file(kAnalytic + "/camera1.json", dir / "passes/camera2.json");
+  fs::copy_file(kAnalytic + "/normal1.exr", dir / "passes/albedo2.exr");
+  r = test::run_hbil("import-povray " + q(dir / "passes") + out, dir.path());
+  EXPECT_EQ(r.code, int(Exit::missing_pass)) << r.err;
+  EXPECT_TRUE(test::contains(r.err, "frame 1: no albedo pass")) << r.err;
+  EXPECT_EQ(test::read_text(dir / "out/frame_0001.exr"), "keep me");
   // An empty folder: input.
   fs::create_directories(dir / "empty");
   r = test::run_hbil("import-povray " + q(dir / "empty") + out, dir.path());

@@ -5,6 +5,7 @@
 
 #include <filesystem>
 #include <iostream>
+#include <map>
 #include <set>
 
 #include "cli/commands.h"
@@ -57,6 +58,16 @@ void import_povray(const ImportOptions& o) {
     if (kept.empty()) throw Error(Exit::input, o.passes + ": no depth pass of frames " + o.frames);
     frames = std::move(kept);
   }
+  // Every frame has the same passes, or `hbil run` would find layers come and go.
+  std::map<std::string, int> seen;  // pass -> a frame that has it
+  for (const auto& f : frames)
+    for (const auto& [pass, path] : f.passes) seen.emplace(pass, f.frame);
+  for (const auto& f : frames)
+    for (const auto& [pass, example] : seen)
+      if (!f.passes.count(pass))
+        throw Error(Exit::missing_pass, "frame " + std::to_string(f.frame) + ": no " + pass +
+                                            " pass in " + o.passes + " (frame " +
+                                            std::to_string(example) + " has one)");
   if (frames.size() > 1 && !out.is_sequence())
     throw Error(Exit::usage, "-o " + o.out + ": " + std::to_string(frames.size()) +
                                  " frames need a frame pattern (e.g. out/frame_####.exr)");
