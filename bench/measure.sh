@@ -9,7 +9,8 @@
 #   SKIP_HD=1 bench/measure.sh            skip the 1920x1080 timings
 #   ONLY_POVRAY=1 bench/measure.sh        only the POV-Ray tables
 #   HELDOUT_POV=/tmp/pov_study bench/measure.sh   also the held-out POV-Ray scene
-#       (samples/povray/study.pov, rendered as its header says)
+#       (samples/povray/study.pov, rendered as its header says); HELDOUT_POV_NOSKY=dir adds
+#       the same scene rendered without its HBIL_Sky line (--reference --bounces 1)
 # Every accuracy figure is `hbil compare` (RMSE, mean error, PSNR with peak 1, over the
 # non-background pixels of all frames); every time is the "s per frame" of `hbil run`'s
 # summary line (reading, camera, computing, writing; display PNGs off).
@@ -72,7 +73,8 @@ povray_table() {
     echo
     echo "| run | indirect vs 1 bounce RMSE / mean / PSNR | indirect vs 3 bounces PSNR | composite RMSE / mean / PSNR | s/frame |"
     echo "|---|---|---|---|---|"
-    for cfg in "temporal chain (default)|" "single frames|--set temporal=false"; do
+    for cfg in "temporal chain (default)|" "single frames|--set temporal=false" \
+      "temporal chain, far field from a constant sky rgb:0.62,0.72,0.95|--set 'environment=\"rgb:0.62,0.72,0.95\"'"; do
       label=${cfg%%|*} args=${cfg#*|}
       name="povs-${#args}"
       # shellcheck disable=SC2086
@@ -82,6 +84,19 @@ povray_table() {
       c=$(cmp "$name" "$HELDOUT_POV/frame_####.exr" composite Combined)
       echo "| $label | $i1 | $(psnr "$i3") | $c | $spf |"
     done
+    # The same scene without its sky (study.pov minus the HBIL_Sky line, rendered with
+    # --reference --bounces 1 into $HELDOUT_POV_NOSKY): how much of the gap is the sky.
+    if [ -n "${HELDOUT_POV_NOSKY:-}" ]; then
+      spf=$(run povns "$HELDOUT_POV_NOSKY/frame_####.exr")
+      i1=$(cmp povns "$HELDOUT_POV_NOSKY/frame_####.exr" indirect 'DiffCol*DiffInd')
+      c=$(cmp povns "$HELDOUT_POV_NOSKY/frame_####.exr" composite Combined)
+      echo "| temporal chain (default), scene without its sky (1-bounce reference) | $i1 | | $c | $spf |"
+      echo
+      echo "- 1-bounce DiffCol*DiffInd with the sky minus without it, RMSE / mean / PSNR:" \
+        "$("$hbil" compare "$tmp/povs1/frame_####.exr" "$HELDOUT_POV_NOSKY/frame_####.exr" \
+          --layer 'DiffCol*DiffInd' --ref-layer 'DiffCol*DiffInd' --json | python3 -c 'import json,sys
+o=json.load(sys.stdin)["overall"]; print("%.4f / %+.4f / %.2f" % (o["rmse"], o["mean_error"], o["psnr"]))')"
+    fi
   fi
 }
 if [ -n "${ONLY_POVRAY:-}" ]; then

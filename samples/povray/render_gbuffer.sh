@@ -68,7 +68,7 @@ anim=(+KFI"$first" +KFF"$last")
 # sees frame_number = A (clock 0) and the files carry the frame number.
 ((first == last)) && anim=(+KFI"$first" +KFF"$((last + 1))" +SF"$first" +EF"$first")
 for p in "${list[@]}"; do
-  opts=(+I"$scene" +O"$passdir/$p.exr" +FE +W"$width" +H"$height" -A -D -V -GA +GF
+  opts=(+I"$scene" +O"$passdir/$p.exr" +FE +W"$width" +H"$height" -A -D -V
         Display=off +L"$(dirname "$scene")" +L"$kit" "${anim[@]}" Declare=HBIL_PASS="${number[$p]}")
   [[ $p == depth ]] && opts+=(+UA)
   [[ $p == reference ]] && opts+=(Declare=HBIL_Radiosity_Bounces="$bounces" Declare=HBIL_Radiosity_Count="$count")

@@ -66,7 +66,7 @@ std::set<int> parse_cut_frames(const std::string& text) {
 }
 
 Job plan(const RunOptions& o) {
-  Job job{{}, io::FramePattern(o.input), io::FramePattern(o.output)};
+  Job job{{}, io::FramePattern(o.input), io::FramePattern(o.output), {}, {}};
   if (!job.in.is_sequence()) {
     if (!o.frames.empty())
       throw Error(Exit::usage,
