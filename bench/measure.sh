@@ -36,68 +36,66 @@ print("%.4f / %+.4f / %.2f" % (o["rmse"], o["mean_error"], o["psnr"]))'
 }
 psnr() { sed 's|.* / ||' <<<"$1"; }
 
+# pov_rows MAIN B1 CFG...: the table of a POV-Ray scene imported into MAIN (3-bounce reference)
+# and B1 (1-bounce reference); each CFG is "label|hbil run options". Prints the header too.
+pov_rows() {
+  local main=$1 b1=$2 cfg label args name spf i1 i3 c
+  shift 2
+  echo "| run | indirect vs 1 bounce RMSE / mean / PSNR | indirect vs 3 bounces PSNR | composite RMSE / mean / PSNR | s/frame |"
+  echo "|---|---|---|---|---|"
+  for cfg in "$@"; do
+    label=${cfg%%|*} args=${cfg#*|}
+    name="pov-$(basename "$(dirname "$main")")-${#label}-${#args}"
+    # shellcheck disable=SC2086
+    spf=$(eval run "$name" "'$main'" $args)
+    i1=$(cmp "$name" "$b1" indirect 'DiffCol*DiffInd')
+    i3=$(cmp "$name" "$main" indirect 'DiffCol*DiffInd')
+    c=$(cmp "$name" "$main" composite Combined)
+    echo "| $label | $i1 | $(psnr "$i3") | $c | $spf |"
+  done
+}
+
 # POV-Ray sample (samples/povray_room): the committed passes imported twice, with the
 # 3-bounce radiosity reference and with the 1-bounce one (bounce1/).
 povray_table() {
-  pov=samples/povray_room
+  local pov=samples/povray_room
   "$hbil" import-povray -q "$pov/passes" -o "$tmp/pov/frame_####.exr"
   "$hbil" import-povray -q "$pov/passes" --reference-dir "$pov/bounce1" -o "$tmp/pov1/frame_####.exr"
   echo
   echo "POV-Ray room (samples/povray_room, 6 frames), indirect against the radiosity"
   echo "DiffCol*DiffInd with 1 and with 3 bounces, composite against the 3-bounce Combined:"
   echo
-  echo "| run | indirect vs 1 bounce RMSE / mean / PSNR | indirect vs 3 bounces PSNR | composite RMSE / mean / PSNR | s/frame |"
-  echo "|---|---|---|---|---|"
-  for cfg in "temporal chain (default)|" \
+  pov_rows "$tmp/pov/frame_####.exr" "$tmp/pov1/frame_####.exr" \
+    "temporal chain (default)|" \
     "single frames, bitmask, back-face thickness|--set temporal=false" \
     "single frames, bitmask, constant thickness 0.4|--set temporal=false --set passes.backdepth=\"\"" \
     "single frames, horizon|--set temporal=false --set method=horizon" \
     "temporal chain, 2 in-frame bounces|--set bounces=2" \
-    "temporal chain, 3 in-frame bounces|--set bounces=3"; do
-    label=${cfg%%|*} args=${cfg#*|}
-    name="pov-${#label}-${#args}"
-    # shellcheck disable=SC2086
-    spf=$(eval run "$name" "'$tmp/pov/frame_####.exr'" $args)
-    i1=$(cmp "$name" "$tmp/pov1/frame_####.exr" indirect 'DiffCol*DiffInd')
-    i3=$(cmp "$name" "$tmp/pov/frame_####.exr" indirect 'DiffCol*DiffInd')
-    c=$(cmp "$name" "$tmp/pov/frame_####.exr" composite Combined)
-    echo "| $label | $i1 | $(psnr "$i3") | $c | $spf |"
-  done
+    "temporal chain, 3 in-frame bounces|--set bounces=3"
   # A scene of a user's own: samples/povray/study.pov, never used for tuning, rendered as its
   # header says into $HELDOUT_POV (with --reference) and ${HELDOUT_POV}_b1 (--bounces 1).
-  if [ -n "${HELDOUT_POV:-}" ]; then
-    "$hbil" import-povray -q "$HELDOUT_POV/passes" --reference-dir "${HELDOUT_POV}_b1/passes" \
-      -o "$tmp/povs1/frame_####.exr"
-    echo
-    echo "Held-out POV-Ray scene $HELDOUT_POV (samples/povray/study.pov, 8 frames, 320x180):"
-    echo
-    echo "| run | indirect vs 1 bounce RMSE / mean / PSNR | indirect vs 3 bounces PSNR | composite RMSE / mean / PSNR | s/frame |"
-    echo "|---|---|---|---|---|"
-    for cfg in "temporal chain (default)|" "single frames|--set temporal=false" \
-      "temporal chain, far field from a constant sky rgb:0.62,0.72,0.95|--set 'environment=\"rgb:0.62,0.72,0.95\"'"; do
-      label=${cfg%%|*} args=${cfg#*|}
-      name="povs-${#args}"
-      # shellcheck disable=SC2086
-      spf=$(eval run "$name" "'$HELDOUT_POV/frame_####.exr'" $args)
-      i1=$(cmp "$name" "$tmp/povs1/frame_####.exr" indirect 'DiffCol*DiffInd')
-      i3=$(cmp "$name" "$HELDOUT_POV/frame_####.exr" indirect 'DiffCol*DiffInd')
-      c=$(cmp "$name" "$HELDOUT_POV/frame_####.exr" composite Combined)
-      echo "| $label | $i1 | $(psnr "$i3") | $c | $spf |"
-    done
-    # The same scene without its sky (study.pov minus the HBIL_Sky line, rendered with
-    # --reference --bounces 1 into $HELDOUT_POV_NOSKY): how much of the gap is the sky.
-    if [ -n "${HELDOUT_POV_NOSKY:-}" ]; then
-      spf=$(run povns "$HELDOUT_POV_NOSKY/frame_####.exr")
-      i1=$(cmp povns "$HELDOUT_POV_NOSKY/frame_####.exr" indirect 'DiffCol*DiffInd')
-      c=$(cmp povns "$HELDOUT_POV_NOSKY/frame_####.exr" composite Combined)
-      echo "| temporal chain (default), scene without its sky (1-bounce reference) | $i1 | | $c | $spf |"
-      echo
-      echo "- 1-bounce DiffCol*DiffInd with the sky minus without it, RMSE / mean / PSNR:" \
-        "$("$hbil" compare "$tmp/povs1/frame_####.exr" "$HELDOUT_POV_NOSKY/frame_####.exr" \
-          --layer 'DiffCol*DiffInd' --ref-layer 'DiffCol*DiffInd' --json | python3 -c 'import json,sys
+  [ -n "${HELDOUT_POV:-}" ] || return 0
+  "$hbil" import-povray -q "$HELDOUT_POV/passes" --reference-dir "${HELDOUT_POV}_b1/passes" \
+    -o "$tmp/povs1/frame_####.exr"
+  echo
+  echo "Held-out POV-Ray scene $HELDOUT_POV (samples/povray/study.pov, 8 frames, 320x180):"
+  echo
+  pov_rows "$HELDOUT_POV/frame_####.exr" "$tmp/povs1/frame_####.exr" \
+    "temporal chain (default)|" "single frames|--set temporal=false" \
+    "temporal chain, far field from a constant sky rgb:0.62,0.72,0.95|--set 'environment=\"rgb:0.62,0.72,0.95\"'"
+  # The same scene without its sky (study.pov minus the HBIL_Sky line, rendered with
+  # --reference --bounces 1 into $HELDOUT_POV_NOSKY): how much of the gap is the sky.
+  [ -n "${HELDOUT_POV_NOSKY:-}" ] || return 0
+  local spf i1 c
+  spf=$(run povns "$HELDOUT_POV_NOSKY/frame_####.exr")
+  i1=$(cmp povns "$HELDOUT_POV_NOSKY/frame_####.exr" indirect 'DiffCol*DiffInd')
+  c=$(cmp povns "$HELDOUT_POV_NOSKY/frame_####.exr" composite Combined)
+  echo "| temporal chain (default), scene without its sky (1-bounce reference) | $i1 | | $c | $spf |"
+  echo
+  echo "- 1-bounce DiffCol*DiffInd with the sky minus without it, RMSE / mean / PSNR:" \
+    "$("$hbil" compare "$tmp/povs1/frame_####.exr" "$HELDOUT_POV_NOSKY/frame_####.exr" \
+      --layer 'DiffCol*DiffInd' --ref-layer 'DiffCol*DiffInd' --json | python3 -c 'import json,sys
 o=json.load(sys.stdin)["overall"]; print("%.4f / %+.4f / %.2f" % (o["rmse"], o["mean_error"], o["psnr"]))')"
-    fi
-  fi
 }
 if [ -n "${ONLY_POVRAY:-}" ]; then
   povray_table
