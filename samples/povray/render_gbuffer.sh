@@ -42,7 +42,10 @@ done
 [[ -f ${args[0]} ]] || { echo "render_gbuffer.sh: ${args[0]}: no such scene file" >&2; exit 3; }
 scene=$(realpath "${args[0]}") out=${args[1]}
 [[ $frames =~ ^([0-9]+)-([0-9]+)$ ]] || { echo "render_gbuffer.sh: --frames A-B, got $frames" >&2; exit 2; }
-first=${BASH_REMATCH[1]} last=${BASH_REMATCH[2]}
+first=$((10#${BASH_REMATCH[1]})) last=$((10#${BASH_REMATCH[2]}))
+((first <= last)) || { echo "render_gbuffer.sh: --frames A-B needs A <= B, got $frames" >&2; exit 2; }
+[[ $bounces =~ ^[1-9][0-9]*$ && $count =~ ^[1-9][0-9]*$ ]] ||
+  { echo "render_gbuffer.sh: --bounces and --count take positive integers" >&2; exit 2; }
 [[ $size =~ ^([0-9]+)x([0-9]+)$ ]] || { echo "render_gbuffer.sh: --size WxH, got $size" >&2; exit 2; }
 width=${BASH_REMATCH[1]} height=${BASH_REMATCH[2]}
 command -v povray >/dev/null || { echo "render_gbuffer.sh: povray not found (apt-get install povray)" >&2; exit 3; }
