@@ -82,7 +82,7 @@ povray_table() {
   echo
   pov_rows "$HELDOUT_POV/frame_####.exr" "$tmp/povs1/frame_####.exr" \
     "temporal chain (default)|" "single frames|--set temporal=false" \
-    "temporal chain, far field from a constant sky rgb:0.62,0.72,0.95|--set 'environment=\"rgb:0.62,0.72,0.95\"'"
+    "temporal chain, far field from the sky the kit exported (--sky 512x256)|--set 'environment=\"$HELDOUT_POV/sky.exr\"'"
   # The same scene without its sky (study.pov minus the HBIL_Sky line, rendered with
   # --reference --bounces 1 into $HELDOUT_POV_NOSKY): how much of the gap is the sky.
   [ -n "${HELDOUT_POV_NOSKY:-}" ] || return 0

@@ -13,6 +13,8 @@
 #include <cmath>
 #include <limits>
 
+#include "hbil/farfield.h"
+#include "io/environment.h"
 #include "test_util.h"
 
 namespace hbil {
@@ -394,6 +396,34 @@ TEST(PovrayImport, RoomSampleDepthAndNormalsMatchItsGeometry) {
   EXPECT_LT(disagree, 6u * 256 * 144 / 500);
   EXPECT_LT(max_rel_depth, 5e-7);
   EXPECT_LT(max_angle * 180 / 3.14159265358979, 0.07);
+}
+
+// Pass 8 (render_gbuffer.sh --sky): the sky alone, as an equirectangular image in the
+// mapping hbil's `environment` reads (Blender's, hbil/farfield.h). The sky of
+// tests/data/povray_sky codes its direction as colour; both objects there must be hidden.
+TEST(PovraySky, EquirectangularInBlendersMappingWithObjectsHidden) {
+  const std::string path = test::kSourceDir + "/tests/data/povray_sky/sky.exr";
+  const test::Pixels p = test::read_pixels(path);
+  ASSERT_EQ(p.spec.width, 64);
+  ASSERT_EQ(p.spec.height, 32);
+  double worst = 0;
+  for (int j = 0; j < p.spec.height; ++j)
+    for (int i = 0; i < p.spec.width; ++i) {
+      const Vec3d w =
+          equirect_to_direction((i + 0.5) / p.spec.width, 1 - (j + 0.5) / p.spec.height);
+      const Vec3d pov(w.x, w.z, w.y);  // hbil world -> POV-Ray
+      for (int c = 0; c < 3; ++c)
+        worst = std::max(worst, std::abs(p.at(i, j, c) - (pov[c] + 1) / 2));
+    }
+  EXPECT_LT(worst, 1e-3);  // half floats: 2^-11 near 1; measured 2.4e-4
+  // Read as hbil's environment: red = (x + 1) / 2 varies along world x only (SH k = 3).
+  const SH9 sh = io::load_environment(path);
+  EXPECT_GT(sh.c[3].x, 0.5f);
+  EXPECT_LT(std::abs(sh.c[1].x), 0.01f);
+  EXPECT_LT(std::abs(sh.c[2].x), 0.01f);
+  // Blue = (POV-Ray z + 1) / 2 = (world y + 1) / 2: along world y (k = 1).
+  EXPECT_GT(sh.c[1].z, 0.5f);
+  EXPECT_LT(std::abs(sh.c[3].z), 0.01f);
 }
 
 // tests/data/povray_room_preview/reference1.exr is room.pov frame 1 rendered as a plain

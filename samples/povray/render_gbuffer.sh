@@ -10,6 +10,9 @@
 #     --reference      also render the radiosity reference (pass 7: Combined and DiffInd)
 #     --bounces N      radiosity bounces of the reference (default 3)
 #     --count N        radiosity rays per sample of the reference (default 1000)
+#     --sky WxH        also render the sky (HBIL_Sky) of the first frame as an equirectangular
+#                      OUTDIR/sky.exr of that size (e.g. 1024x512), for hbil's far field:
+#                      hbil run ... --set 'environment="OUTDIR/sky.exr"'
 #     --passes LIST    comma-separated subset of depth,normal,albedo,emit,direct,backfaces
 #                      (default: all; depth and normal are always rendered)
 #     --hbil PATH      the hbil binary (default: hbil on PATH, else build/hbil of this tree)
@@ -19,7 +22,7 @@
 # pixel is one ray through its centre and the passes agree pixel for pixel.
 set -euo pipefail
 kit=$(cd "$(dirname "$0")" && pwd)
-frames=1-1 size=640x360 reference=0 bounces=3 count=1000 hbil="" do_import=1
+frames=1-1 size=640x360 reference=0 bounces=3 count=1000 hbil="" do_import=1 sky=""
 passes=depth,normal,albedo,emit,direct,backfaces
 args=()
 usage() { sed -n '2,20p' "$0" | sed 's/^# \{0,1\}//'; exit 2; }
@@ -30,6 +33,7 @@ while (($#)); do
     --reference) reference=1; shift ;;
     --bounces) bounces=$2; shift 2 ;;
     --count) count=$2; shift 2 ;;
+    --sky) sky=$2; shift 2 ;;
     --passes) passes=$2; shift 2 ;;
     --hbil) hbil=$2; shift 2 ;;
     --no-import) do_import=0; shift ;;
@@ -48,6 +52,10 @@ first=$((10#${BASH_REMATCH[1]})) last=$((10#${BASH_REMATCH[2]}))
   { echo "render_gbuffer.sh: --bounces and --count take positive integers" >&2; exit 2; }
 [[ $size =~ ^([0-9]+)x([0-9]+)$ ]] || { echo "render_gbuffer.sh: --size WxH, got $size" >&2; exit 2; }
 width=${BASH_REMATCH[1]} height=${BASH_REMATCH[2]}
+if [[ -n $sky ]]; then
+  [[ $sky =~ ^([0-9]+)x([0-9]+)$ && ${BASH_REMATCH[1]} -eq $((2 * ${BASH_REMATCH[2]})) ]] ||
+    { echo "render_gbuffer.sh: --sky WxH with W = 2 H, got $sky" >&2; exit 2; }
+fi
 command -v povray >/dev/null || { echo "render_gbuffer.sh: povray not found (apt-get install povray)" >&2; exit 3; }
 if ((do_import)) && [[ -z $hbil ]]; then
   hbil=$(command -v hbil || true)
@@ -84,6 +92,22 @@ for p in "${list[@]}"; do
   awk -v p="$p" -v n="${number[$p]}" -v f="$((last - first + 1))" -v s="$start" -v e="$(date +%s.%N)" \
     -v size="${width}x$height" 'BEGIN { printf "render_gbuffer.sh: pass %d %-9s %s, %d frame(s), %.2f s per frame\n", n, p, size, f, (e - s) / f }' >&2
 done
+if [[ -n $sky ]]; then
+  # One frame (the first): hbil's environment is one image for the whole run.
+  start=$(date +%s.%N)
+  opts=(+I"$scene" +O"$passdir/sky.exr" +FE +W"${sky%x*}" +H"${sky#*x}" -A -D -V Display=off
+        +L"$(dirname "$scene")" +L"$kit" +KFI"$first" +KFF"$((first + 1))" +SF"$first" +EF"$first"
+        Declare=HBIL_PASS=8)
+  if ! (cd "$passdir" && povray "${opts[@]}") >"$passdir/povray_sky.log" 2>&1; then
+    tail -20 "$passdir/povray_sky.log" >&2
+    echo "render_gbuffer.sh: povray failed on the sky (log: $passdir/povray_sky.log)" >&2
+    exit 1
+  fi
+  rendered=("$passdir"/sky[0-9]*.exr)  # POV-Ray pads the number to the digits of first + 1
+  mv "${rendered[0]}" "$out/sky.exr"
+  awk -v s="$start" -v e="$(date +%s.%N)" -v size="$sky" -v o="$out/sky.exr" \
+    'BEGIN { printf "render_gbuffer.sh: pass 8 sky       %s, %.2f s -> %s\n", size, e - s, o }' >&2
+fi
 if ((do_import)); then
   "$hbil" import-povray "$passdir" -o "$out/frame_####.exr" --frames "$first-$last"
 fi

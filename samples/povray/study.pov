@@ -2,7 +2,7 @@
 // for tuning (README "POV-Ray", held-out row). A study with a checkered floor, a shelf of
 // 2 cm boards, a table with a thin top and legs, a window to a sky, the sun through it and a
 // lamp. The camera pans and rises over frames 1-8. Not committed as renders; to measure:
-//   samples/povray/render_gbuffer.sh --frames 1-8 --size 320x180 --reference \
+//   samples/povray/render_gbuffer.sh --frames 1-8 --size 320x180 --reference --sky 512x256 \
 //     samples/povray/study.pov /tmp/pov_study
 //   samples/povray/render_gbuffer.sh --frames 1-8 --size 320x180 --reference --bounces 1 \
 //     --no-import samples/povray/study.pov /tmp/pov_study_b1
