@@ -73,20 +73,14 @@ void import_povray(const ImportOptions& o) {
                                  " frames need a frame pattern (e.g. out/frame_####.exr)");
 
   // Every frame waits as a hidden temporary until all succeeded (see run.cpp).
-  std::vector<std::pair<std::string, std::string>> done;
-  std::set<fs::path> created;
-  for (const auto& f : frames) {
-    fs::path dir = fs::absolute(fs::path(out.path(f.frame))).parent_path(), top;
-    for (; !dir.empty() && !fs::exists(dir) && dir != dir.parent_path(); dir = dir.parent_path())
-      top = dir;
-    if (!top.empty()) created.insert(top);
-  }
+  io::OutputBatch batch;
+  for (const auto& f : frames) batch.expect(out.path(f.frame));
   try {
     for (const auto& f : frames) {
       const io::ImportedFrame img = io::import_povray_frame(f, o.view_layer);
       const std::string final_path = out.path(f.frame);
       const std::string tmp = io::prepare_temporary(final_path, "pov");
-      done.emplace_back(tmp, final_path);
+      batch.add(tmp, final_path);
       write_frame(tmp, img, o.passes);
       if (!o.quiet) {
         std::string layers;
@@ -95,11 +89,9 @@ void import_povray(const ImportOptions& o) {
                   << img.height << "): " << layers << "\n";
       }
     }
-    for (const auto& d : done) io::commit(d.first, d.second);
+    batch.commit();
   } catch (...) {
-    std::error_code ec;
-    for (const auto& d : done) fs::remove(d.first, ec);
-    for (const auto& dir : created) fs::remove_all(dir, ec);
+    batch.discard();
     throw;
   }
   if (!o.quiet)

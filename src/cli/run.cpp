@@ -217,25 +217,11 @@ void run(const RunOptions& o) {
 
   // Finished frames wait as hidden temporaries and are renamed into place only when every
   // frame succeeded: a failed run leaves the output folder as it was.
-  std::vector<std::pair<std::string, std::string>> done;  // temporary, final
-  // Output folders this run creates (the topmost missing ancestor of each): removed again
-  // when the run fails.
-  std::set<fs::path> created;
-  auto note_created = [&created](const std::string& file) {
-    fs::path dir = fs::absolute(fs::path(file)).parent_path(), top;
-    for (; !dir.empty() && !fs::exists(dir) && dir != dir.parent_path(); dir = dir.parent_path())
-      top = dir;
-    if (!top.empty()) created.insert(top);
-  };
+  io::OutputBatch batch;
   for (int f : job.frames) {
-    note_created(job.out.path(f));
-    if (display_pattern) note_created(display_pattern->path(f));
+    batch.expect(job.out.path(f));
+    if (display_pattern) batch.expect(display_pattern->path(f));
   }
-  auto discard = [&] {
-    std::error_code ec;
-    for (const auto& d : done) fs::remove(d.first, ec);
-    for (const auto& dir : created) fs::remove_all(dir, ec);
-  };
   const auto start = Clock::now();
   int width = 0, height = 0;
   std::string first_path;
@@ -287,16 +273,16 @@ void run(const RunOptions& o) {
         continue;
       }
       const std::string out_path = job.out.path(frame);
-      done.emplace_back(io::write_temporary(out_path, io::make_output(result, p), in.spec, p, cam),
-                        out_path);
+      batch.add(io::write_temporary(out_path, io::make_output(result, p), in.spec, p, cam),
+                out_path);
       if (display) {
         int channels = 0;
         const std::vector<float> px = display_pixels(result, display_layer, channels);
         const std::string path = display_pattern->path(frame);
-        done.emplace_back(io::write_display_temporary(
-                              path, px, channels, result.width, result.height, *display,
-                              "hbil " + display_layer + ", frame " + std::to_string(frame)),
-                          path);
+        batch.add(io::write_display_temporary(
+                      path, px, channels, result.width, result.height, *display,
+                      "hbil " + display_layer + ", frame " + std::to_string(frame)),
+                  path);
       }
       if (o.verbose) {
         auto ms = [](auto a, auto b) {
@@ -326,10 +312,10 @@ void run(const RunOptions& o) {
         std::cerr << (tty ? "\r\033[K" : "") << line << (tty ? "" : "\n") << std::flush;
       }
     }
-    for (const auto& d : done) io::commit(d.first, d.second);
+    batch.commit();
   } catch (...) {
     if (tty && !o.quiet) std::cerr << "\n";
-    discard();
+    batch.discard();
     throw;
   }
   const double total = std::chrono::duration<double>(Clock::now() - start).count();

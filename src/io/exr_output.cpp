@@ -93,10 +93,12 @@ std::string prepare_temporary(const std::string& final_path, const std::string& 
                                     final_p.parent_path().string() + ": " + ec.message());
   }
   static std::atomic<int> counter{0};
-  return (final_p.parent_path() /
-          ("." + final_p.stem().string() + ".hbil-tmp-" + tag + std::to_string(getpid()) + "-" +
-           std::to_string(counter++) + final_p.extension().string()))
-      .string();
+  // Appended piece by piece: "." + std::string trips GCC 12's -Wrestrict (a false positive).
+  std::string name = ".";
+  name += final_p.stem().string();
+  name += ".hbil-tmp-" + tag + std::to_string(getpid()) + "-" + std::to_string(counter++);
+  name += final_p.extension().string();
+  return (final_p.parent_path() / name).string();
 }
 
 std::string write_temporary(const std::string& final_path, const OutputImage& img,
@@ -133,6 +135,29 @@ std::string write_temporary(const std::string& final_path, const OutputImage& im
     throw Error(Exit::output, final_path + ": cannot write: " + why);
   }
   return tmp.string();
+}
+
+void OutputBatch::expect(const std::string& final_path) {
+  fs::path dir = fs::absolute(fs::path(final_path)).parent_path(), top;
+  for (; !dir.empty() && !fs::exists(dir) && dir != dir.parent_path(); dir = dir.parent_path())
+    top = dir;
+  if (!top.empty()) created_.insert(top);
+}
+
+void OutputBatch::add(const std::string& temporary, const std::string& final_path) {
+  files_.emplace_back(temporary, final_path);
+}
+
+void OutputBatch::commit() {
+  for (const auto& [temporary, final_path] : files_) io::commit(temporary, final_path);
+  files_.clear();
+}
+
+void OutputBatch::discard() noexcept {
+  std::error_code ec;
+  for (const auto& f : files_) fs::remove(f.first, ec);
+  for (const auto& dir : created_) fs::remove_all(dir, ec);
+  files_.clear();
 }
 
 void commit(const std::string& temporary, const std::string& final_path) {

@@ -11,7 +11,10 @@
 
 #include <OpenImageIO/imageio.h>
 
+#include <filesystem>
+#include <set>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "hbil/ao_frame.h"
@@ -45,5 +48,23 @@ std::string prepare_temporary(const std::string& final_path, const std::string& 
 
 // Renames a temporary into place (replacing an older file). Throws Error(Exit::output).
 void commit(const std::string& temporary, const std::string& final_path);
+
+// The files of one command, all or nothing: each waits as a temporary (add()) and commit()
+// renames them into place only once every one was written; discard() removes them and the
+// output folders that were missing when expect() was called.
+class OutputBatch {
+ public:
+  // Before anything is written: a file the command will write. Its topmost missing folder
+  // is remembered for discard().
+  void expect(const std::string& final_path);
+  void add(const std::string& temporary, const std::string& final_path);
+  // Renames every temporary into place, in order. Throws Error(Exit::output).
+  void commit();
+  void discard() noexcept;
+
+ private:
+  std::vector<std::pair<std::string, std::string>> files_;  // temporary, final
+  std::set<std::filesystem::path> created_;
+};
 
 }  // namespace hbil::io
