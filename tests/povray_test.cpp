@@ -237,6 +237,21 @@ TEST(PovrayImport, RoomSampleHasEveryLayerAndTheScenesCamera) {
           EXPECT_LT(p.at(x, y, z), 6.0f);
         }
     EXPECT_GT(hits, p.spec.width * p.spec.height * 9 / 10) << frame;
+    // DiffInd as Cycles defines it: DiffCol x (DiffDir + DiffInd) + Emit = Combined.
+    double worst = 0;
+    for (int y = 0; y < p.spec.height; ++y)
+      for (int x = 0; x < p.spec.width; ++x)
+        for (const char* c : {"R", "G", "B"}) {
+          auto v = [&](const std::string& pass) {
+            return double(p.at(x, y, p.channel("ViewLayer." + pass + "." + c)));
+          };
+          if (p.at(x, y, a) != 1.0f || v("DiffCol") < 0.05) continue;
+          const double want = v("Combined");
+          worst = std::max(
+              worst,
+              std::abs(v("DiffCol") * (v("DiffDir") + v("DiffInd")) + v("Emit") - want) / want);
+        }
+    EXPECT_LT(worst, 1e-5) << frame;
   }
 }
 

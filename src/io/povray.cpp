@@ -299,53 +299,37 @@ ImportedFrame import_povray_frame(const PovrayFrameFiles& files, const std::stri
     }
     out.layers.push_back(pass);
   };
-  std::vector<Vec3> diffcol(n), diffdir(n), emit_env(n);
-  auto as_vec = [n](const PassImage& img, std::vector<Vec3>& v) {
-    for (size_t i = 0; i < n; ++i) v[i] = {img.at(i, 0), img.at(i, 1), img.at(i, 2)};
+  // The optional colour passes (empty when absent).
+  auto optional = [&](const std::string& pass) {
+    return files.passes.count(pass) ? read(pass, 3) : PassImage{};
   };
-  if (files.passes.count("albedo")) {
-    const PassImage img = read("albedo", 3);
-    add_rgb("DiffCol", img, true, false);
-    as_vec(img, diffcol);
+  const PassImage albedo = optional("albedo"), direct = optional("direct"), emit = optional("emit"),
+                  ref = optional("reference");
+  if (!albedo.data.empty()) add_rgb("DiffCol", albedo, true, false);
+  if (!direct.data.empty()) add_rgb("DiffDir", direct, true, false);
+  if (!emit.data.empty()) {
+    add_rgb("Emit", emit, true, false);
+    add_rgb("Env", emit, false, true);
   }
-  if (files.passes.count("direct")) {
-    const PassImage img = read("direct", 3);
-    add_rgb("DiffDir", img, true, false);
-    as_vec(img, diffdir);
+  if (!ref.data.empty()) {
+    add_rgb("Combined", ref, true, true);
+    out.layers.back() = "Combined (reference)";
   }
-  if (files.passes.count("emit")) {
-    const PassImage img = read("emit", 3);
-    add_rgb("Emit", img, true, false);
-    add_rgb("Env", img, false, true);
-    as_vec(img, emit_env);
-  }
-  const bool reference = files.passes.count("reference") > 0;
-  {
-    PassImage ref;
-    if (reference) ref = read("reference", 3);
-    if (reference) {
-      add_rgb("Combined", ref, true, true);
-      out.layers.back() = "Combined (reference)";
-    }
-    add(L + "Combined.A") = alpha;
-    if (reference && files.passes.count("albedo") && files.passes.count("direct") &&
-        files.passes.count("emit")) {
-      // Cycles' DiffInd is the indirect diffuse light divided by DiffCol.
-      auto& r = add(L + "DiffInd.R");
-      auto& g = add(L + "DiffInd.G");
-      auto& b = add(L + "DiffInd.B");
-      std::vector<float>* ch[3] = {&r, &g, &b};
-      for (size_t i = 0; i < n; ++i) {
-        if (!hit[i]) continue;
-        for (int c = 0; c < 3; ++c) {
-          const float col = diffcol[i][c];
-          if (!(col > 0)) continue;
-          const float indirect = ref.at(i, c) - col * diffdir[i][c] - emit_env[i][c];
-          (*ch[c])[i] = std::max(indirect, 0.0f) / col;
-        }
+  add(L + "Combined.A") = alpha;
+  if (!ref.data.empty() && !albedo.data.empty() && !direct.data.empty() && !emit.data.empty()) {
+    // Cycles' DiffInd is the indirect diffuse light divided by DiffCol.
+    std::vector<float>* ch[3] = {&add(L + "DiffInd.R"), &add(L + "DiffInd.G"),
+                                 &add(L + "DiffInd.B")};
+    for (size_t i = 0; i < n; ++i) {
+      if (!hit[i]) continue;
+      for (int c = 0; c < 3; ++c) {
+        const float col = albedo.at(i, c);
+        if (!(col > 0)) continue;
+        const float indirect = ref.at(i, c) - col * direct.at(i, c) - emit.at(i, c);
+        (*ch[c])[i] = std::max(indirect, 0.0f) / col;
       }
-      out.layers.push_back("DiffInd");
     }
+    out.layers.push_back("DiffInd");
   }
   if (files.passes.count("backfaces")) {
     const PassImage img = read("backfaces", 3);
