@@ -3,10 +3,8 @@
 // (see io/povray.h), so that `hbil run` reads a POV-Ray sequence as it reads a Cycles one.
 #include <OpenImageIO/imageio.h>
 
-#include <filesystem>
 #include <iostream>
 #include <map>
-#include <set>
 
 #include "cli/commands.h"
 #include "hbil/error.h"
@@ -18,8 +16,6 @@
 namespace hbil::cli {
 
 namespace {
-
-namespace fs = std::filesystem;
 
 struct ImportOptions {
   std::string passes;
