@@ -36,6 +36,14 @@ float to_half(float v) {
   return back;
 }
 
+// Index of a channel of an imported frame (a test failure, and 0, when it is absent).
+size_t channel(const io::ImportedFrame& f, const std::string& name) {
+  for (size_t c = 0; c < f.channels.size(); ++c)
+    if (f.channels[c] == name) return c;
+  ADD_FAILURE() << "no channel " << name;
+  return 0;
+}
+
 // What hbil.inc's depth pigment writes for u = depth / range, rounded to half as POV-Ray's
 // EXR writer does.
 void encode_depth(double u, float rgb[3]) {
@@ -127,14 +135,8 @@ TEST(PovrayImport, AnalyticSceneDepthNormalsAndCameraAreExact) {
   const io::PovrayCamera pc = io::read_povray_camera(files.camera);
   ASSERT_EQ(f.width, 128);
   ASSERT_EQ(f.height, 72);
-  auto channel = [&](const std::string& name) {
-    for (size_t c = 0; c < f.channels.size(); ++c)
-      if (f.channels[c] == name) return int(c);
-    ADD_FAILURE() << "no channel " << name;
-    return 0;
-  };
-  const int cz = channel("ViewLayer.Depth.Z"), cn = channel("ViewLayer.Normal.X"),
-            ca = channel("ViewLayer.Combined.A");
+  const size_t cz = channel(f, "ViewLayer.Depth.Z"), cn = channel(f, "ViewLayer.Normal.X"),
+               ca = channel(f, "ViewLayer.Combined.A");
   const size_t nc = f.channels.size();
   const Vec3d dir_unit = pc.direction / length(pc.direction);
   double max_rel_depth = 0, max_angle = 0, max_pos = 0;
@@ -371,12 +373,8 @@ TEST(PovrayImport, RoomSampleDepthAndNormalsMatchItsGeometry) {
     const io::ImportedFrame f = io::import_povray_frame(files);
     const io::PovrayCamera pc = io::read_povray_camera(files.camera);
     const size_t nc = f.channels.size();
-    size_t cz = 0, cn = 0, ca = 0;
-    for (size_t c = 0; c < nc; ++c) {
-      if (f.channels[c] == "ViewLayer.Depth.Z") cz = c;
-      if (f.channels[c] == "ViewLayer.Normal.X") cn = c;
-      if (f.channels[c] == "ViewLayer.Combined.A") ca = c;
-    }
+    const size_t cz = channel(f, "ViewLayer.Depth.Z"), cn = channel(f, "ViewLayer.Normal.X"),
+                 ca = channel(f, "ViewLayer.Combined.A");
     const Vec3d dir_unit = pc.direction / length(pc.direction);
     for (int row = 0; row < f.height; ++row)
       for (int col = 0; col < f.width; ++col) {
@@ -454,14 +452,9 @@ TEST(PovrayImport, PassesRecomposePovRaysOwnRender) {
   files.passes["reference"] = test::kSourceDir + "/tests/data/povray_room_preview/reference1.exr";
   const io::ImportedFrame f = io::import_povray_frame(files);
   const size_t nc = f.channels.size();
-  auto channel = [&](const std::string& pass) {
-    for (size_t c = 0; c < nc; ++c)
-      if (f.channels[c] == "ViewLayer." + pass + ".R") return c;
-    ADD_FAILURE() << "no " << pass;
-    return size_t(0);
-  };
-  const size_t comb = channel("Combined"), col = channel("DiffCol"), dir = channel("DiffDir"),
-               emit = channel("Emit"), env = channel("Env");
+  const size_t comb = channel(f, "ViewLayer.Combined.R"), col = channel(f, "ViewLayer.DiffCol.R"),
+               dir = channel(f, "ViewLayer.DiffDir.R"), emit = channel(f, "ViewLayer.Emit.R"),
+               env = channel(f, "ViewLayer.Env.R");
   double worst = 0, sum = 0;
   for (size_t i = 0; i < size_t(f.width) * f.height; ++i)
     for (size_t k = 0; k < 3; ++k) {

@@ -176,43 +176,49 @@ std::string fmt(double v) {
 // --------------------------------------------------------------------------------------
 // Sidecar JSON helpers: every error names the source and the key.
 
-[[noreturn]] void sidecar_error(const std::string& src, const std::string& msg) {
-  throw Error(Exit::camera, src + ": " + msg);
-}
-
 std::string quoted(const char* key) {
   return std::string("key \"") + key + "\"";
 }
 
-const json& require_key(const json& j, const char* key, const std::string& src) {
+}  // namespace
+
+[[noreturn]] void camera_file_error(const std::string& src, const std::string& msg) {
+  throw Error(Exit::camera, src + ": " + msg);
+}
+
+const json& camera_file_key(const json& j, const char* key, const std::string& src) {
   auto it = j.find(key);
-  if (it == j.end()) sidecar_error(src, quoted(key) + " is missing");
+  if (it == j.end()) camera_file_error(src, quoted(key) + " is missing");
   return *it;
 }
 
-double as_number(const json& v, const char* key, const std::string& src) {
+double camera_file_number(const json& v, const char* key, const std::string& src) {
   if (!v.is_number())
-    sidecar_error(src, quoted(key) + " must be a number, found " + v.type_name() + " " + v.dump());
+    camera_file_error(src,
+                      quoted(key) + " must be a number, found " + v.type_name() + " " + v.dump());
   const double d = v.get<double>();
-  if (!std::isfinite(d)) sidecar_error(src, quoted(key) + " is not finite");
+  if (!std::isfinite(d)) camera_file_error(src, quoted(key) + " is not finite");
   return d;
 }
 
+namespace {
+
 double positive_number(const json& j, const char* key, const std::string& src) {
-  const double d = as_number(require_key(j, key, src), key, src);
-  if (!(d > 0)) sidecar_error(src, quoted(key) + " must be > 0, found " + fmt(d));
+  const double d = camera_file_number(camera_file_key(j, key, src), key, src);
+  if (!(d > 0)) camera_file_error(src, quoted(key) + " must be > 0, found " + fmt(d));
   return d;
 }
 
 double optional_number(const json& j, const char* key, double fallback, const std::string& src) {
   auto it = j.find(key);
-  return it == j.end() ? fallback : as_number(*it, key, src);
+  return it == j.end() ? fallback : camera_file_number(*it, key, src);
 }
 
 std::string string_value(const json& j, const char* key, const std::string& src) {
-  const json& v = require_key(j, key, src);
+  const json& v = camera_file_key(j, key, src);
   if (!v.is_string())
-    sidecar_error(src, quoted(key) + " must be a string, found " + v.type_name() + " " + v.dump());
+    camera_file_error(src,
+                      quoted(key) + " must be a string, found " + v.type_name() + " " + v.dump());
   return v.get<std::string>();
 }
 
@@ -576,30 +582,31 @@ Camera camera_from_sidecar(const std::string& path) {
   try {
     j = json::parse(text.str());
   } catch (const json::exception& e) {
-    sidecar_error(path, std::string("not valid JSON: ") + e.what());
+    camera_file_error(path, std::string("not valid JSON: ") + e.what());
   }
   return camera_from_sidecar_json(j, path);
 }
 
 Camera camera_from_sidecar_json(const json& j, const std::string& src) {
-  if (!j.is_object()) sidecar_error(src, "not a JSON object");
+  if (!j.is_object()) camera_file_error(src, "not a JSON object");
   const std::string format = string_value(j, "format", src);
   if (format != "hbil-camera-1")
-    sidecar_error(src, "key \"format\" is \"" + format + "\", expected \"hbil-camera-1\"");
+    camera_file_error(src, "key \"format\" is \"" + format + "\", expected \"hbil-camera-1\"");
   const std::string type = string_value(j, "type", src);
   if (type != "PERSP")
-    sidecar_error(
+    camera_file_error(
         src, "key \"type\" is \"" + type + "\": only perspective cameras (PERSP) are supported");
 
-  const json& res = require_key(j, "resolution", src);
+  const json& res = camera_file_key(j, "resolution", src);
   if (!res.is_array() || res.size() != 2 || !res[0].is_number_integer() ||
       !res[1].is_number_integer() || res[0].get<long long>() <= 0 || res[1].get<long long>() <= 0 ||
       res[0].get<long long>() > 1 << 20 || res[1].get<long long>() > 1 << 20)
-    sidecar_error(src, "key \"resolution\" must be [width, height] with positive integers, found " +
-                           res.dump());
+    camera_file_error(
+        src,
+        "key \"resolution\" must be [width, height] with positive integers, found " + res.dump());
   const int W = res[0].get<int>(), H = res[1].get<int>();
 
-  const json& mw = require_key(j, "matrix_world", src);
+  const json& mw = camera_file_key(j, "matrix_world", src);
   double m[4][4];
   bool ok = mw.is_array() && mw.size() == 4;
   for (int r = 0; ok && r < 4; ++r) {
@@ -610,20 +617,20 @@ Camera camera_from_sidecar_json(const json& j, const std::string& src) {
       ok = ok && std::isfinite(m[r][c]);
     }
   }
-  if (!ok) sidecar_error(src, "key \"matrix_world\" must be 4 rows of 4 finite numbers");
+  if (!ok) camera_file_error(src, "key \"matrix_world\" must be 4 rows of 4 finite numbers");
   if (std::abs(m[3][0]) + std::abs(m[3][1]) + std::abs(m[3][2]) + std::abs(m[3][3] - 1) > 1e-6)
-    sidecar_error(src, "key \"matrix_world\": last row must be [0, 0, 0, 1]");
+    camera_file_error(src, "key \"matrix_world\": last row must be [0, 0, 0, 1]");
 
   const double lens = positive_number(j, "lens_mm", src);
   const double sensor_w = positive_number(j, "sensor_width_mm", src);
   const double sensor_h = positive_number(j, "sensor_height_mm", src);
   const std::string fit = string_value(j, "sensor_fit", src);
   if (fit != "AUTO" && fit != "HORIZONTAL" && fit != "VERTICAL")
-    sidecar_error(src, "key \"sensor_fit\" is \"" + fit +
-                           "\", expected \"AUTO\", \"HORIZONTAL\" or \"VERTICAL\"");
+    camera_file_error(src, "key \"sensor_fit\" is \"" + fit +
+                               "\", expected \"AUTO\", \"HORIZONTAL\" or \"VERTICAL\"");
   const double pixel_aspect = optional_number(j, "pixel_aspect", 1.0, src);
   if (!(pixel_aspect > 0))
-    sidecar_error(src, "key \"pixel_aspect\" must be > 0, found " + fmt(pixel_aspect));
+    camera_file_error(src, "key \"pixel_aspect\" must be > 0, found " + fmt(pixel_aspect));
   const double shift_x = optional_number(j, "shift_x", 0.0, src);
   const double shift_y = optional_number(j, "shift_y", 0.0, src);
 
@@ -634,15 +641,15 @@ Camera camera_from_sidecar_json(const json& j, const std::string& src) {
   for (int col = 0; col < 3; ++col) {
     const double len =
         std::sqrt(m[0][col] * m[0][col] + m[1][col] * m[1][col] + m[2][col] * m[2][col]);
-    if (!(len > 1e-12)) sidecar_error(src, "key \"matrix_world\" has a zero-length axis");
+    if (!(len > 1e-12)) camera_file_error(src, "key \"matrix_world\" has a zero-length axis");
     for (int r = 0; r < 3; ++r) rc.m[r][col] = m[r][col] / len;
   }
   const Mat3d should_be_identity = rc.transposed() * rc;
   for (int a = 0; a < 3; ++a)
     for (int b = 0; b < 3; ++b)
       if (std::abs(should_be_identity.m[a][b] - (a == b)) > 1e-4)
-        sidecar_error(src, "key \"matrix_world\" is sheared (axes not orthogonal)");
-  if (!(det3(rc) > 0)) sidecar_error(src, "key \"matrix_world\" mirrors (negative scale)");
+        camera_file_error(src, "key \"matrix_world\" is sheared (axes not orthogonal)");
+  if (!(det3(rc) > 0)) camera_file_error(src, "key \"matrix_world\" mirrors (negative scale)");
 
   Camera cam;
   cam.width = W;

@@ -47,6 +47,14 @@ Camera camera_from_sidecar(const std::string& path);
 // Same from parsed JSON; source_name prefixes error messages and fills Camera::source.
 Camera camera_from_sidecar_json(const nlohmann::json& j, const std::string& source_name);
 
+// Readers for JSON camera files (sidecars, POV-Ray camera files): every error is
+// Error(Exit::camera, "<src>: key \"<key>\" ...").
+[[noreturn]] void camera_file_error(const std::string& src, const std::string& msg);
+const nlohmann::json& camera_file_key(const nlohmann::json& j, const char* key,
+                                      const std::string& src);  // present
+double camera_file_number(const nlohmann::json& v, const char* key,
+                          const std::string& src);  // a finite number
+
 // OpenEXR standard attributes (OIIO names "worldtocamera", "worldtoNDC", TypeMatrix44,
 // float or double). Imath row-vector convention: p' = p * M, translation in the last row.
 //  worldToCamera: camera space left-handed, +x right, +y up, +z forward.

@@ -13,47 +13,27 @@
 #include <sstream>
 
 #include "hbil/error.h"
+#include "io/camera_io.h"
 
 namespace hbil::io {
 
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-const std::vector<std::string>& povray_passes() {
-  static const std::vector<std::string> p = {"depth",  "normal",    "albedo",   "emit",
-                                             "direct", "backfaces", "reference"};
-  return p;
-}
-
 namespace {
 
 constexpr float kBackgroundDepth = 1e10f;  // what Blender writes where nothing was hit
 
-[[noreturn]] void camera_error(const std::string& path, const std::string& msg) {
-  throw Error(Exit::camera, path + ": " + msg);
-}
-
 Vec3d read_vec(const json& j, const char* key, const std::string& path) {
-  auto it = j.find(key);
-  if (it == j.end()) camera_error(path, std::string("key \"") + key + "\" is missing");
-  if (!it->is_array() || it->size() != 3)
-    camera_error(path, std::string("key \"") + key + "\" must be an array of 3 numbers");
-  double v[3];
-  for (int i = 0; i < 3; ++i) {
-    if (!(*it)[i].is_number())
-      camera_error(path, std::string("key \"") + key + "\" must be an array of 3 numbers");
-    v[i] = (*it)[i].get<double>();
-    if (!std::isfinite(v[i])) camera_error(path, std::string("key \"") + key + "\" is not finite");
-  }
-  return {v[0], v[1], v[2]};
+  const json& v = camera_file_key(j, key, path);
+  if (!v.is_array() || v.size() != 3)
+    camera_file_error(path, std::string("key \"") + key + "\" must be an array of 3 numbers");
+  return {camera_file_number(v[0], key, path), camera_file_number(v[1], key, path),
+          camera_file_number(v[2], key, path)};
 }
 
 double read_num(const json& j, const char* key, const std::string& path) {
-  auto it = j.find(key);
-  if (it == j.end()) camera_error(path, std::string("key \"") + key + "\" is missing");
-  if (!it->is_number() || !std::isfinite(it->get<double>()))
-    camera_error(path, std::string("key \"") + key + "\" must be a finite number");
-  return it->get<double>();
+  return camera_file_number(camera_file_key(j, key, path), key, path);
 }
 
 // A pass image as float, `min_channels` or more channels. Errors name the file and frame.
@@ -99,10 +79,10 @@ PovrayCamera read_povray_camera(const std::string& path) {
   try {
     in >> j;
   } catch (const json::exception& e) {
-    camera_error(path, std::string("not valid JSON: ") + e.what());
+    camera_file_error(path, std::string("not valid JSON: ") + e.what());
   }
   if (!j.is_object() || j.value("format", "") != "hbil-povray-camera-1")
-    camera_error(path, "key \"format\" must be \"hbil-povray-camera-1\"");
+    camera_file_error(path, "key \"format\" must be \"hbil-povray-camera-1\"");
   PovrayCamera c;
   c.frame = int(read_num(j, "frame", path));
   c.clock = read_num(j, "clock", path);
@@ -114,23 +94,23 @@ PovrayCamera read_povray_camera(const std::string& path) {
   c.right = read_vec(j, "right", path);
   c.up = read_vec(j, "up", path);
   if (c.width <= 0 || c.height <= 0)
-    camera_error(path, "keys \"width\" and \"height\" must be > 0");
-  if (!(c.depth_range > 0)) camera_error(path, "key \"depth_range\" must be > 0");
+    camera_file_error(path, "keys \"width\" and \"height\" must be > 0");
+  if (!(c.depth_range > 0)) camera_file_error(path, "key \"depth_range\" must be > 0");
   const double ld = length(c.direction), lr = length(c.right), lu = length(c.up);
   if (!(ld > 0 && lr > 0 && lu > 0))
-    camera_error(path, "\"direction\", \"right\" and \"up\" must not be zero");
+    camera_file_error(path, "\"direction\", \"right\" and \"up\" must not be zero");
   const double tol = 1e-6;
   if (std::abs(dot(c.direction, c.right)) > tol * ld * lr ||
       std::abs(dot(c.direction, c.up)) > tol * ld * lu ||
       std::abs(dot(c.right, c.up)) > tol * lr * lu)
-    camera_error(path, "\"direction\", \"right\" and \"up\" are not orthogonal");
+    camera_file_error(path, "\"direction\", \"right\" and \"up\" are not orthogonal");
   // Square pixels: |right| / |up| = width / height.
   if (std::abs(lr / lu - double(c.width) / c.height) > 1e-6 * lr / lu)
-    camera_error(path, "|right| / |up| is not width / height (pixels are not square)");
+    camera_file_error(path, "|right| / |up| is not width / height (pixels are not square)");
   // POV-Ray draws +right to the right of the image and +up upwards when (right, up,
   // direction) is left-handed in its space, which hbil.inc's cameras are.
   if (dot(cross(c.right, c.up), c.direction) <= 0)
-    camera_error(path, "right x up does not point along direction (a mirrored camera)");
+    camera_file_error(path, "right x up does not point along direction (a mirrored camera)");
   return c;
 }
 

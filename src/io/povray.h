@@ -27,9 +27,6 @@
 
 namespace hbil::io {
 
-// The pass files render_gbuffer.sh writes, in the order they are documented.
-const std::vector<std::string>& povray_passes();
-
 // POV-Ray (left-handed, y up) -> hbil world (right-handed, z up).
 constexpr Vec3d pov_to_world(const Vec3d& p) {
   return {p.x, p.z, p.y};
