@@ -14,6 +14,10 @@ Command line common to all scene scripts (after ``--``)::
     --mode backfaces   only the BackFaces view layer (backfaces.py): the depth of the
                        first back face, 1 sample; merge_backdepth.py adds it to main frames
     --samples N        Cycles samples per pixel (fixed, no adaptive sampling)
+    --size WxH         render resolution in pixels (default 256x144; the committed samples
+                       use the default). The camera sidecar records the size rendered.
+    --bounces N        override the mode's bounce count (max_bounces = diffuse_bounces = N);
+                       0 = direct light only. Default: the mode's own (main 8, bounce1 1).
     --seed S           Cycles seed (fixed for all frames)
     --frames 1-8       frames to render
     --save-blend PATH  also save the built scene
@@ -32,7 +36,7 @@ from mathutils import Vector
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import export_camera  # noqa: E402
 
-RES = (256, 144)
+RES = (256, 144)  # default --size
 FRAMES = (1, 8)
 
 
@@ -52,6 +56,24 @@ def pop_choice(flag, choices):
     return value
 
 
+def parse_size(text):
+    """'1920x1080' -> (1920, 1080)."""
+    try:
+        w, h = (int(v) for v in text.lower().split("x"))
+    except ValueError:
+        raise argparse.ArgumentTypeError("--size must be WxH, e.g. 1920x1080")
+    if w <= 0 or h <= 0:
+        raise argparse.ArgumentTypeError("--size must be positive")
+    return (w, h)
+
+
+def non_negative(text):
+    v = int(text)
+    if v < 0:
+        raise argparse.ArgumentTypeError("must be >= 0")
+    return v
+
+
 def parse_args():
     argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
     p = argparse.ArgumentParser()
@@ -60,6 +82,8 @@ def parse_args():
     p.add_argument("--samples", type=int, default=64)
     p.add_argument("--seed", type=int, default=1)
     p.add_argument("--frames", default="%d-%d" % FRAMES)
+    p.add_argument("--size", type=parse_size, default=RES, metavar="WxH")
+    p.add_argument("--bounces", type=non_negative, default=None, metavar="N")
     p.add_argument("--save-blend")
     p.add_argument("--no-render", action="store_true")
     return p.parse_args(argv)
@@ -241,11 +265,13 @@ def hard_cut(ob, last_frame):
 # --------------------------------------------------------------------------- #
 # render configuration
 # --------------------------------------------------------------------------- #
-def configure(scene, mode, samples, seed, ao_distance=1.0):
+def configure(scene, mode, samples, seed, ao_distance=1.0, size=RES, bounces=None):
+    """bounces: None = the mode's own (main 8, otherwise 1); N overrides max_bounces and
+    diffuse_bounces (0 = direct light only)."""
     scene.frame_start, scene.frame_end = FRAMES
     r = scene.render
     r.engine = 'CYCLES'
-    r.resolution_x, r.resolution_y = RES
+    r.resolution_x, r.resolution_y = size
     r.resolution_percentage = 100
     r.pixel_aspect_x = r.pixel_aspect_y = 1.0
     r.use_border = False
@@ -295,6 +321,9 @@ def configure(scene, mode, samples, seed, ao_distance=1.0):
     else:
         c.max_bounces = 1
         c.diffuse_bounces = 1
+    if bounces is not None:
+        c.max_bounces = bounces
+        c.diffuse_bounces = bounces
 
     # World > Ambient Occlusion distance drives the AO pass
     scene.world.light_settings.distance = ao_distance
@@ -372,7 +401,7 @@ def run(name, build):
     scene = clear_scene()
     scene.name = name
     build(scene)
-    configure(scene, a.mode, a.samples, a.seed)
+    configure(scene, a.mode, a.samples, a.seed, size=a.size, bounces=a.bounces)
     if a.save_blend:
         bpy.ops.wm.save_as_mainfile(filepath=os.path.abspath(a.save_blend), compress=True)
     if a.no_render:

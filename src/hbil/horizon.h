@@ -1,4 +1,5 @@
-// horizon.h: the horizon search of one pixel and the closed-form slice integrals.
+// horizon.h: the horizon search of one pixel and the closed-form slice integrals (the
+// marches themselves are in march.h).
 //
 // Implements HBIL (Mayaux 2018) §1.3 (horizon angles measured from the local view vector),
 // §2.1 (horizons initialised from the normal), §2.2.1 (bent normal, eq. 4-6) and §2.2.2
@@ -61,6 +62,7 @@ struct HorizonConfig {
   // Temporal chain (HBIL §3.3 with accumulation): every slice angle turns by `rotation`
   // (radians) and every step jitter shifts by `jitter_shift` (mod 1), both from the frame.
   float rotation = 0, jitter_shift = 0;
+  bool vectorised = true;  // bitmask: march_bitmask_row (SIMD) instead of march_pixel
 };
 // The rotation and jitter shift of frame `frame` for `directions` evenly spaced slice
 // directions per block: a van der Corput fraction of the spacing π/directions, and the
@@ -107,13 +109,5 @@ struct PixelSums {
 // the way from the AO radius to the gather radius. The same for every pixel of a sub-buffer,
 // so it is made once.
 std::vector<float> step_fractions(const HorizonConfig& c, float jitter);
-
-// Marches the slices at rotations phi[0..n) about ω_o (radians; φ = 0 is the slice holding
-// the view-space x axis) for the
-// pixel at texel (i, j) of `view`, with view-space position P and unit normal n.
-// `fraction` holds c.steps sample positions from step_fractions().
-PixelSums march_pixel(const SampleView& view, int i, int j, const Vec3& P, const Vec3& n,
-                      const float* phi, int n_slices, const float* fraction,
-                      const HorizonConfig& c);
 
 }  // namespace hbil

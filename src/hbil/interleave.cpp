@@ -5,6 +5,8 @@
 
 #include <numbers>
 
+#include "hbil/march.h"
+
 namespace hbil {
 
 namespace {
@@ -64,7 +66,17 @@ HorizonImage horizon_full(const ViewGBuffer& g, const HorizonConfig& c, int slic
                         1,
                         radiance ? radiance->data() : nullptr,
                         g.thickness.empty() ? nullptr : g.thickness.data()};
+  const bool simd = c.bitmask && c.vectorised;
   tbb::parallel_for(0, g.height, [&](int y) {
+    if (simd) {
+      std::vector<PixelSums> row(g.width);
+      march_bitmask_row(view, 0, y, g.width, phi.data(), slices, fraction.data(), c, row.data());
+      for (int x = 0; x < g.width; ++x) {
+        const size_t i = size_t(y) * g.width + x;
+        if (!g.is_background(i)) store(out, i, row[x], slices);
+      }
+      return;
+    }
     for (int x = 0; x < g.width; ++x) {
       const size_t i = size_t(y) * g.width + x;
       if (g.is_background(i)) continue;
@@ -145,9 +157,19 @@ HorizonImage horizon_interleaved(const ViewGBuffer& g, const HorizonConfig& c, i
   std::vector<std::pair<int, int>> tasks;  // (phase, row)
   for (int phase = 0; phase < 16; ++phase)
     for (int j = 0; j < subs[phase].h; ++j) tasks.emplace_back(phase, j), ++rows;
+  const bool simd = c.bitmask && c.vectorised;
   tbb::parallel_for(0, rows, [&](int task) {
     const auto [phase, j] = tasks[task];
     const Sub& s = subs[phase];
+    if (simd) {
+      std::vector<PixelSums> row(s.w);
+      march_bitmask_row(s.view, 0, j, s.w, s.phi.data(), slices, s.fraction.data(), c, row.data());
+      for (int i = 0; i < s.w; ++i) {
+        const size_t dst = size_t(4 * j + s.oy) * g.width + (4 * i + s.ox);
+        if (!g.is_background(dst)) store(out, dst, row[i], slices);
+      }
+      return;
+    }
     for (int i = 0; i < s.w; ++i) {
       const size_t dst = size_t(4 * j + s.oy) * g.width + (4 * i + s.ox);
       if (g.is_background(dst)) continue;

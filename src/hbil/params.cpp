@@ -53,6 +53,9 @@ const std::vector<ParamInfo>& params_table() {
       {"spatial_filter", &Params::spatial_filter, 0, 1, "bool",
        "after re-interleaving, average each pixel with the 4x4 block around it (depth- and "
        "normal-aware) so that every pixel integrates all 16 x slices directions"},
+      {"vectorised", &Params::vectorised, 0, 1, "bool",
+       "method bitmask: march the pixels of a row in SIMD lanes (AVX-512, AVX2, ... chosen at "
+       "run time); false runs the scalar reference, which gives the same results to the bit"},
       {"depth_tolerance", &Params::depth_tolerance, 0, 1, "relative",
        "spatial filter: neighbours farther from the pixel's tangent plane than this fraction of "
        "its depth are not averaged (nor those whose normal is more than 37 degrees off)"},

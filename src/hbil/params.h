@@ -26,6 +26,7 @@ struct Params {
   bool interleave = true;      // 4x4 deinterleaved rendering (§3.3); off = every pixel all slices
   bool spatial_filter = true;  // depth-aware 4x4 filter after re-interleaving
   double depth_tolerance = 0.05;  // spatial filter: relative depth difference still averaged
+  bool vectorised = true;  // bitmask: SIMD march (identical results); false = scalar reference
 
   // --- Occlusion model and indirect light ---
   std::string method = "bitmask";  // "horizon" (HBIL) or "bitmask" (Therrien et al. 2023)

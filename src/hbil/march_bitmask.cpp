@@ -1,0 +1,151 @@
+// march_bitmask.cpp: the visibility-bitmask march of one pixel (Therrien et al. 2023,
+// Algorithm 1, with HBIL's slices, eq. 16-18 gather and measured thickness); the scalar
+// reference of march_bitmask_simd.cpp. See horizon.h for the departures from the papers.
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <cstdint>
+
+#include "hbil/march.h"
+#include "hbil/march_common.h"
+
+namespace hbil {
+
+using namespace march;
+
+PixelSums march_bitmask_pixel(const SampleView& view, int i, int j, const Vec3& P, const Vec3& n,
+                              const float* phi, int n_slices, const float* fraction,
+                              const HorizonConfig& c) {
+  PixelSums acc;
+  const bool gather = view.radiance != nullptr;
+  // The gather may reach beyond the AO radius: gather_steps more samples per side between
+  // the two radii, which only the gather sees (AO is the same with or without them).
+  const bool far = gather && c.gather_steps > 0;
+  const PixelFrame f = pixel_frame(view, P, c, far);
+  const float r2 = c.radius * c.radius;
+  const float rg2 = far ? c.gather_radius * c.gather_radius : r2;
+  const int n_steps = c.steps + (far ? c.gather_steps : 0);
+  const float cd = std::cos(kSectorWidth), sd = std::sin(kSectorWidth);
+  for (int s = 0; s < n_slices; ++s) {
+    SliceLine L;
+    if (!slice_line(f, n, std::cos(phi[s]), std::sin(phi[s]), c, L)) continue;
+    const float gamma = std::atan2(L.nx, L.ny);  // angle of n' from ω_o
+    // 32 sectors over [γ − π/2, γ + π/2]; sector k's cosine-weighted integral is
+    // W[k] = G(b_k) − G(a_k), so AO keeps the definition of eq. 9.
+    const float sector0 = gamma - 0.5f * kPi;
+    // Boundaries by rotation from (sin, cos)(γ − π/2) = (−n'_y, n'_x) / |n'|, without 33
+    // sin/cos pairs.
+    const float nl = std::sqrt(L.nx * L.nx + L.ny * L.ny);
+    float sb = nl > 0.f ? -L.ny / nl : -1.f, cb = nl > 0.f ? L.nx / nl : 0.f;
+    Antiderivative bound[kSectors + 1];
+    for (int k = 0; k <= kSectors; ++k) {
+      bound[k] = antiderivative(sector0 + float(k) * kSectorWidth, sb, cb, L.nx, L.ny);
+      const float sn = sb * cd + cb * sd;
+      cb = cb * cd - sb * sd;
+      sb = sn;
+    }
+    std::uint32_t occluded = 0, occluded_g = 0;
+    Vec3 irradiance;
+    for (int side = 0; side < 2; ++side) {
+      const float sx = side == 0 ? L.dx : -L.dx, sy = side == 0 ? L.dy : -L.dy;
+      const float sign = side == 0 ? 1.f : -1.f;  // θ > 0 on the +D side
+      // The signed angle from ω_o of the direction from P to X.
+      auto angle = [&](const Vec3& X) {
+        const Vec3 d = X - P;
+        return sign * fast_acos(std::clamp(dot(d, f.wo) / length(d), -1.f, 1.f));
+      };
+      for (int k = 0; k < n_steps; ++k) {
+        const bool near = k < c.steps;
+        if (near && f.r_tex < 1.f) continue;  // the AO radius is under a texel
+        const float o = step_offset(k, c.steps, f.r_tex, f.rg_tex, fraction);
+        const int oi = int(std::floor(sx * o + 0.5f)), oj = int(std::floor(sy * o + 0.5f));
+        if (oi == 0 && oj == 0) continue;
+        const int si = i + oi, sj = j + oj;
+        if (si < 0 || sj < 0 || si >= view.width || sj >= view.height) break;  // screen edge
+        const std::ptrdiff_t k_s = view.index(si, sj);
+        Vec3 S = view.position[k_s];
+        // Move S along its tangent plane onto the ray through the exact point of the line
+        // (see horizon.h): that ray lies in the slice plane.
+        const Vec3 ray = f.ray_P + L.dv * (sign * o) * float(view.stride);
+        const Vec3& n_s = view.normal[k_s];
+        const float denom = dot(ray, n_s);
+        if (std::fabs(denom) > kGrazing * length(ray)) S = ray * (dot(S, n_s) / denom);
+        const Vec3 d3 = S - P;  // background has z = 3e38, n = 0: |d3| > radius
+        const float dist2 = dot(d3, d3);
+        if (!(dist2 < rg2) || dist2 <= 0.f) continue;
+        const bool in_ao = near && dist2 < r2;
+        const float dist = std::sqrt(dist2);
+        const float theta_f = sign * fast_acos(std::clamp(dot(d3, f.wo) / dist, -1.f, 1.f));
+        // Algorithm 1: the sample is an occluder of thickness t along its view ray; it covers
+        // [θf, θb] and lights the sectors it newly covers. Thickness: measured (back faces)
+        // where known, else the constant heuristic.
+        const bool measured = view.thickness && view.thickness[k_s] >= 0.f;
+        const float t = measured ? view.thickness[k_s] : c.thickness + c.thickness_growth * S.z;
+        const float theta_b = angle(S + S * (t / length(S)));
+        float th_lo = std::min(theta_f, theta_b), th_hi = std::max(theta_f, theta_b);
+        if (measured) {
+          // A measured thickness is the object's own, so the sample must also stand for the
+          // surface between it and its neighbours, which a point misses (light would leak
+          // between samples on a wall): it covers its tangent plane between the rays through
+          // the midpoints to its neighbours on the line, extruded by t along them. (The
+          // constant thickness is a heuristic tuned with point samples; see horizon.h.)
+          // The first sample reaches back only half way to P: nearer, the direction from P to
+          // a point of another sample's plane is dominated by sub-pixel error (Blender's depth
+          // is one jittered sample, P is placed at the pixel centre), so within about one
+          // texel of a crease the surface between P and its first sample is missed.
+          const float o_prev =
+              k == 0 ? 0.f : std::min(step_offset(k - 1, c.steps, f.r_tex, f.rg_tex, fraction), o);
+          const float lo_o = 0.5f * (o + o_prev);
+          // Neighbours within the same group only: the last sample of a group reaches as far
+          // beyond itself as its predecessor is before it, never towards the gather-only
+          // samples, so ao is the same with or without them.
+          const bool last = k + 1 == (near ? c.steps : n_steps);
+          const float hi_o =
+              last ? o + 0.5f * (o - o_prev)
+                   : 0.5f * (o +
+                             std::max(step_offset(k + 1, c.steps, f.r_tex, f.rg_tex, fraction), o));
+          const float plane = dot(S, n_s);
+          for (float oo : {lo_o, hi_o}) {
+            const Vec3 r = f.ray_P + L.dv * (sign * oo) * float(view.stride);
+            const float den = dot(r, n_s);
+            if (!(std::fabs(den) > kGrazing * length(r))) continue;
+            const Vec3 X = r * (plane / den);
+            if (!(X.z > 0.f)) continue;
+            const float a = angle(X), b = angle(X + X * (t / length(X)));
+            th_lo = std::min(th_lo, std::min(a, b));
+            th_hi = std::max(th_hi, std::max(a, b));
+          }
+        }
+        const float lo = (th_lo - sector0) / kSectorWidth;
+        const float hi = (th_hi - sector0) / kSectorWidth;
+        // "Round" criterion: a sector counts when at least half covered.
+        const int a = std::clamp(int(std::floor(lo + 0.5f)), 0, kSectors);
+        const int b = std::clamp(int(std::floor(hi + 0.5f)), 0, kSectors);
+        if (b <= a) continue;
+        const std::uint32_t mask = (b - a == 32 ? ~0u : ((1u << (b - a)) - 1u)) << a;
+        if (in_ao) occluded |= mask;
+        if (!gather) continue;
+        std::uint32_t fresh = mask & ~occluded_g;
+        occluded_g |= mask;
+        if (fresh) {
+          float w = 0.f;
+          for (; fresh; fresh &= fresh - 1) {
+            const int q = std::countr_zero(fresh);
+            w += bound[q + 1].ao - bound[q].ao;
+          }
+          irradiance += view.radiance[k_s] * facing_weight(n_s, d3 / dist) * w;
+        }
+      }
+    }
+    for (int k = 0; k < kSectors; ++k) {
+      if (occluded >> k & 1u) continue;
+      acc.ao += bound[k + 1].ao - bound[k].ao;
+      acc.vis += bound[k + 1].vis - bound[k].vis;
+      acc.bent += L.D * (bound[k + 1].bx - bound[k].bx) + f.wo * (bound[k + 1].by - bound[k].by);
+    }
+    acc.irradiance += irradiance;
+  }
+  return acc;
+}
+
+}  // namespace hbil
