@@ -1,76 +1,88 @@
-// ao_bench.cpp: throughput of the AO / bent-cone chain (Google Benchmark).
+// ao_bench.cpp: throughput of the horizon search at the default preset (Google Benchmark).
 //
-// The scene is ray cast analytically (a V-groove with a slanted occluder, tests/
-// analytic_scenes.h) so the benchmark needs no files. Counters:
-//   horizon_samples/s  depth samples marched per second (pixels x slices x 2 sides x steps)
-//   Mpixels/s          frame pixels per second
-// Arguments: width, height, steps, slices per pixel, interleave (1/0).
+// The frame is a real Blender render: samples/room_poles/frame_0003.exr (256x144), or the
+// EXR named by $HBIL_BENCH_FRAME (with its camera sidecar beside it), e.g. a 1920x1080
+// render of samples/blender/room_poles.py --size 1920x1080. What is timed is the search of
+// one frame (search_frame: the march of every pixel, interleaved, and the spatial filter),
+// the part `hbil run -v` reports inside "compute". Counters:
+//   samples/s   depth samples marched per second: pixels x slices x 2 sides x steps, plus
+//               gather_steps per side when the irradiance gather runs
+//   Mpixels/s   frame pixels per second
+// Arguments: gather (0: ao and bentcone only, 1: with the irradiance gather), vectorised
+// (1: SIMD march, 0: the scalar reference), steps per side.
 #include <benchmark/benchmark.h>
 
-#include <numbers>
+#include <cstdlib>
 
-#include "analytic_scenes.h"
 #include "hbil/ao_frame.h"
+#include "io/camera_io.h"
+#include "io/exr_frame.h"
 
 namespace {
 
 using namespace hbil;
 
-struct Scene {
-  Camera cam;
+struct Frame {
   GBuffer g;
+  Camera cam;
+  std::vector<Vec3> radiance;
 };
 
-const Scene& scene(int w, int h) {
-  static std::map<std::pair<int, int>, Scene> cache;
-  auto it = cache.find({w, h});
-  if (it != cache.end()) return it->second;
-  Scene s;
-  s.cam = test::look_at(w, h, 60, {0.4, 2.0, 1.5}, {0, 0, 0.2});
-  std::vector<test::HalfPlane> planes = test::v_groove(75 * std::numbers::pi / 180);
-  planes.push_back({{0.3, 0.5, 0.1}, {0.6, 0.0, 0.8}, {0, 0, 1}});
-  s.g = test::ray_cast(s.cam, planes);
-  return cache.emplace(std::make_pair(w, h), std::move(s)).first->second;
+const Frame& frame() {
+  static const Frame f = [] {
+    const char* env = std::getenv("HBIL_BENCH_FRAME");
+    const std::string path =
+        env ? env : std::string(HBIL_SOURCE_DIR) + "/samples/room_poles/frame_0003.exr";
+    Params p;
+    p.outputs = {"ao", "bentcone", "irradiance"};
+    const io::InputFrame in = io::open_frame(path, 3, p);
+    Frame r;
+    r.g = io::read_fields(in, io::fields_needed(in, p), p);
+    r.cam = io::find_camera(in, r.g, p);
+    return r;
+  }();
+  return f;
 }
 
-void BM_AoFrame(benchmark::State& state) {
-  const int w = int(state.range(0)), h = int(state.range(1));
-  Params p;
-  p.method = "horizon";  // the README's throughput table is for the horizon kernel
+void BM_Search(benchmark::State& state) {
+  const bool gather = state.range(0) != 0;
+  Params p;  // the default preset
+  p.vectorised = state.range(1) != 0;
   p.steps = int(state.range(2));
-  p.slices = int(state.range(3));
-  p.interleave = state.range(4) != 0;
-  const Scene& s = scene(w, h);
-  const ViewGBuffer v = make_view_gbuffer(s.g, s.cam, p);
+  p.outputs = gather ? std::vector<std::string>{"ao", "bentcone", "irradiance"}
+                     : std::vector<std::string>{"ao", "bentcone"};
+  const Frame& f = frame();
+  const ViewGBuffer v = make_view_gbuffer(f.g, f.cam, p);
   for (auto _ : state) {
-    AoFrame f = compute_ao_frame(v, s.g, s.cam, p);
-    benchmark::DoNotOptimize(f.ao.data());
+    HorizonImage h = search_frame(v, f.g, f.cam, p, FrameInputs{});
+    benchmark::DoNotOptimize(h.ao.data());
   }
-  const double pixels = double(w) * h;
-  state.counters["horizon_samples/s"] = benchmark::Counter(
-      pixels * p.slices * 2 * p.steps, benchmark::Counter::kIsIterationInvariantRate);
+  const double pixels = double(f.g.width) * f.g.height;
+  const int per_side = p.steps + (gather ? p.gather_steps : 0);
+  state.counters["samples/s"] = benchmark::Counter(pixels * p.slices * 2 * per_side,
+                                                   benchmark::Counter::kIsIterationInvariantRate);
   state.counters["Mpixels/s"] =
       benchmark::Counter(pixels * 1e-6, benchmark::Counter::kIsIterationInvariantRate);
+  state.SetLabel(std::to_string(f.g.width) + "x" + std::to_string(f.g.height));
 }
 
-// Resolution scaling at the default settings.
-BENCHMARK(BM_AoFrame)
-    ->Args({256, 144, 12, 2, 1})
-    ->Args({960, 540, 12, 2, 1})
-    ->Args({1920, 1080, 12, 2, 1})
+// The default preset (16 steps): AO only and with the gather, SIMD and scalar.
+BENCHMARK(BM_Search)
+    ->ArgNames({"gather", "simd", "steps"})
+    ->Args({0, 1, 16})
+    ->Args({1, 1, 16})
+    ->Args({0, 0, 16})
+    ->Args({1, 0, 16})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
-// Cost against steps per side and slices per pixel, at 960x540.
-BENCHMARK(BM_AoFrame)
-    ->Args({960, 540, 6, 2, 1})
-    ->Args({960, 540, 24, 2, 1})
-    ->Args({960, 540, 48, 2, 1})
-    ->Args({960, 540, 12, 4, 1})
-    ->Args({960, 540, 12, 8, 1})
+// Cost against steps per side (SIMD, AO only).
+BENCHMARK(BM_Search)
+    ->ArgNames({"gather", "simd", "steps"})
+    ->Args({0, 1, 8})
+    ->Args({0, 1, 32})
+    ->Args({0, 1, 64})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
-// Reference mode (every pixel, 32 slices) against interleaved at equal directions per block.
-BENCHMARK(BM_AoFrame)->Args({960, 540, 12, 32, 0})->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace
 

@@ -138,7 +138,6 @@ TEST_F(Cli, RunWritesLayersAndMetadata) {
     ASSERT_EQ(px.spec.height, kSampleH);
     std::vector<std::string> names(px.spec.channelnames.begin(), px.spec.channelnames.end());
     EXPECT_EQ(names, kOutputChannels);
-    EXPECT_TRUE(px.spec.format == OIIO::TypeDesc::FLOAT) << px.spec.format.c_str();
 
     // Metadata: the effective preset, the version, the camera, the input's stamp.
     // Metadata holds the preset as run, "auto" resolved, so that it reproduces the file.
@@ -157,7 +156,14 @@ TEST_F(Cli, RunWritesLayersAndMetadata) {
     EXPECT_EQ(px.spec.get_string_attribute("Camera"), "Camera");
     EXPECT_EQ(px.spec.get_string_attribute("Scene"), "room_poles");
     EXPECT_EQ(px.spec.get_string_attribute("Frame"), std::to_string(frame));
-    EXPECT_EQ(px.spec.get_string_attribute("compression"), "zip");
+    EXPECT_EQ(px.spec.get_string_attribute("compression"), "piz");
+    // Colour layers as half, data layers (ao, bentcone) as float (colour_half = true).
+    ASSERT_EQ(px.spec.channelformats.size(), names.size());
+    for (size_t c = 0; c < names.size(); ++c) {
+      const bool data = names[c].rfind("ao.", 0) == 0 || names[c].rfind("bentcone.", 0) == 0;
+      EXPECT_EQ(px.spec.channelformats[c], data ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::HALF)
+          << names[c];
+    }
 
     // Values: AO in [0, 1] with real occlusion somewhere; bent normals unit length where
     // the AO is defined; cone cosines in [0, 1].
@@ -269,6 +275,44 @@ TEST_F(Cli, NoDisplayWritesOnlyTheExr) {
   expect_failure(run_args(test::kRoomPoles + "/frame_####.exr", path("out/out_####.exr"),
                           "--frames 1 --no-display --display-out " + q(path("out/d_####.png"))),
                  Exit::usage, {"--no-display"});
+}
+
+// compression and colour_half: the file says what the preset asked for, and half colour
+// layers hold the float run's values to half's precision (2^-11 relative above 6.1e-5).
+TEST_F(Cli, OutputCompressionAndHalfColourLayers) {
+  for (const char* c : {"zip", "none"}) {
+    const RunResult r = hbil(run_args(test::kRoomPoles + "/frame_####.exr",
+                                      path(std::string("out/") + c + "_####.exr"),
+                                      std::string("--frames 1 --no-display --set compression=") +
+                                          c + " --set colour_half=false"));
+    ASSERT_EQ(r.code, 0) << r.err;
+    const Pixels px = test::read_pixels(path(std::string("out/") + c + "_0001.exr"));
+    EXPECT_EQ(px.spec.get_string_attribute("compression"), c);
+    EXPECT_TRUE(px.spec.channelformats.empty() && px.spec.format == OIIO::TypeDesc::FLOAT);
+  }
+  const RunResult r = hbil(run_args(test::kRoomPoles + "/frame_####.exr", path("out/half_####.exr"),
+                                    "--frames 1 --no-display"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  const Pixels full = test::read_pixels(path("out/none_0001.exr"));
+  const Pixels half = test::read_pixels(path("out/half_0001.exr"));
+  ASSERT_EQ(full.data.size(), half.data.size());
+  double worst = 0;
+  size_t compared = 0;
+  for (size_t k = 0; k < full.data.size(); ++k) {
+    const float f = full.data[k], h = half.data[k];
+    const size_t c = k % full.spec.nchannels;
+    const std::string& name = full.spec.channelnames[c];
+    const bool data = name.rfind("ao.", 0) == 0 || name.rfind("bentcone.", 0) == 0;
+    if (data) {
+      ASSERT_EQ(f, h) << name << ": data layers stay 32-bit";
+    } else if (std::fabs(f) > 6.1e-5f) {
+      worst = std::max(worst, std::fabs(double(h) - f) / std::fabs(f));
+      ++compared;
+    }
+  }
+  EXPECT_GT(compared, full.data.size() / 4);
+  EXPECT_LE(worst, std::ldexp(1.0, -11)) << "worst relative error of a half colour value";
+  EXPECT_GT(worst, 0) << "the colour layers were not written as half";
 }
 
 TEST_F(Cli, InputSpaceFromThePresetAndTheOption) {

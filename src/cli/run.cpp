@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <future>
 #include <iostream>
 #include <memory>
 #include <optional>
@@ -223,8 +224,51 @@ void run(const RunOptions& o) {
     if (display_pattern) batch.expect(display_pattern->path(f));
   }
   const auto start = Clock::now();
-  int width = 0, height = 0;
-  std::string first_path;
+  auto ms = [](auto a, auto b) { return std::chrono::duration<double, std::milli>(b - a).count(); };
+  // A frame as read: header, fields and camera, with the time each took.
+  struct Loaded {
+    io::InputFrame in;
+    GBuffer g;
+    Camera cam;
+    double read_ms = 0, camera_ms = 0;
+  };
+  auto load = [&](int frame) {
+    const auto t0 = Clock::now();
+    Loaded l;
+    l.in = io::open_frame(job.in.path(frame), frame, p);
+    l.g = io::read_fields(l.in, io::fields_needed(l.in, p), p);
+    const auto t_read = Clock::now();
+    l.cam = io::find_camera(l.in, l.g, p);
+    l.read_ms = ms(t0, t_read);
+    l.camera_ms = ms(t_read, Clock::now());
+    return l;
+  };
+  // What is printed of a frame once its files are written.
+  struct Written {
+    int frame = 0;
+    size_t index = 0;
+    double read_ms = 0, camera_ms = 0, compute_ms = 0, write_ms = 0;
+    std::string camera, history;
+    Clock::time_point started;
+  };
+  auto report = [&](const Written& w) {
+    if (o.verbose) {
+      char line[256];
+      std::snprintf(
+          line, sizeof line,
+          "hbil: frame %d: read %.0f ms, camera %.0f ms, compute %.0f ms, write %.0f ms\n", w.frame,
+          w.read_ms, w.camera_ms, w.compute_ms, w.write_ms);
+      std::cerr << (tty ? "\r\033[K" : "") << line;
+    }
+    if (!o.quiet) {
+      char line[512];
+      std::snprintf(line, sizeof line, "hbil: frame %d (%zu/%zu) %.3f s  camera: %s%s", w.frame,
+                    w.index, job.frames.size(),
+                    std::chrono::duration<double>(Clock::now() - w.started).count(),
+                    w.camera.c_str(), w.history.c_str());
+      std::cerr << (tty ? "\r\033[K" : "") << line << (tty ? "" : "\n") << std::flush;
+    }
+  };
   try {
     // Pre-roll frames first (computed, not written), then the frames to write.
     std::vector<int> order = job.preroll;
@@ -232,11 +276,20 @@ void run(const RunOptions& o) {
     const bool temporal = p.temporal && order.size() > 1;
     std::optional<TemporalChain> chain;
     if (temporal) chain.emplace(p);
+    // The frame loop overlaps: frame k+1 is read and frame k−1 written while frame k is
+    // computed. Each stage keeps the frame order and the computation does not depend on
+    // the overlap, so the output bytes are those of a loop that does one thing at a time.
+    std::future<Loaded> next = std::async(std::launch::async, load, order.front());
+    std::future<Written> writing;  // the previous frame's files
+    std::string first_path;
+    int width = 0, height = 0;
     for (size_t k = 0; k < order.size(); ++k) {
       const auto t0 = Clock::now();
       const int frame = order[k];
       const bool preroll = k < job.preroll.size();
-      const io::InputFrame in = io::open_frame(job.in.path(frame), frame, p);
+      Loaded cur = next.get();
+      if (k + 1 < order.size()) next = std::async(std::launch::async, load, order[k + 1]);
+      const io::InputFrame& in = cur.in;
       if (k == 0) {
         width = in.spec.width;
         height = in.spec.height;
@@ -247,16 +300,13 @@ void run(const RunOptions& o) {
                                         std::to_string(width) + "x" + std::to_string(height) +
                                         " of " + first_path);
       }
-      GBuffer g = io::read_fields(in, io::fields_needed(in, p), p);
-      const auto t_read = Clock::now();
-      const Camera cam = io::find_camera(in, g, p);
-      const auto t_camera = Clock::now();
-      TemporalReport rep;
-      const AoFrame result =
-          chain ? chain->process(g, cam, frame, job.cuts.count(frame) > 0,
-                                 environment ? &*environment : nullptr, &rep)
-                : compute_ao_frame(g, cam, p, environment ? &*environment : nullptr);
       const auto t_compute = Clock::now();
+      TemporalReport rep;
+      AoFrame result =
+          chain ? chain->process(cur.g, cur.cam, frame, job.cuts.count(frame) > 0,
+                                 environment ? &*environment : nullptr, &rep)
+                : compute_ao_frame(cur.g, cur.cam, p, environment ? &*environment : nullptr);
+      const double compute_ms = ms(t_compute, Clock::now());
       if (rep.cut) {
         const std::string line = "hbil: frame " + std::to_string(frame) + ": cut (" +
                                  rep.cut_reason + "), history dropped";
@@ -272,46 +322,43 @@ void run(const RunOptions& o) {
         }
         continue;
       }
-      const std::string out_path = job.out.path(frame);
-      batch.add(io::write_temporary(out_path, io::make_output(result, p), in.spec, p, cam),
-                out_path);
-      if (display) {
-        int channels = 0;
-        const std::vector<float> px = display_pixels(result, display_layer, channels);
-        const std::string path = display_pattern->path(frame);
-        batch.add(io::write_display_temporary(
-                      path, px, channels, result.width, result.height, *display,
-                      "hbil " + display_layer + ", frame " + std::to_string(frame)),
-                  path);
+      Written w{frame,
+                k + 1 - job.preroll.size(),
+                cur.read_ms,
+                cur.camera_ms,
+                compute_ms,
+                0,
+                cur.cam.source,
+                "",
+                t0};
+      if (chain && !rep.first && !rep.cut) {
+        char h[96];
+        std::snprintf(h, sizeof h, "  history %.0f %% (%s)", 100 * rep.history,
+                      rep.reprojection.c_str());
+        w.history = h;
       }
-      if (o.verbose) {
-        auto ms = [](auto a, auto b) {
-          return std::chrono::duration<double, std::milli>(b - a).count();
-        };
-        char line[256];
-        std::snprintf(
-            line, sizeof line,
-            "hbil: frame %d: read %.0f ms, camera %.0f ms, compute %.0f ms, write %.0f ms\n", frame,
-            ms(t0, t_read), ms(t_read, t_camera), ms(t_camera, t_compute),
-            ms(t_compute, Clock::now()));
-        std::cerr << line;
-      }
-      if (!o.quiet) {
-        const double s = std::chrono::duration<double>(Clock::now() - t0).count();
-        char line[512];
-        std::string history;
-        if (chain && !rep.first && !rep.cut) {
-          char h[96];
-          std::snprintf(h, sizeof h, "  history %.0f %% (%s)", 100 * rep.history,
-                        rep.reprojection.c_str());
-          history = h;
+      if (writing.valid()) report(writing.get());
+      // The input's header and the camera go with the frame to its writer.
+      writing = std::async(std::launch::async, [&, w, result = std::move(result), spec = in.spec,
+                                                cam = cur.cam]() mutable {
+        const auto t_write = Clock::now();
+        const std::string out_path = job.out.path(w.frame);
+        batch.add(io::write_temporary(out_path, io::make_output(result, p), spec, p, cam),
+                  out_path);
+        if (display) {
+          int channels = 0;
+          const std::vector<float> px = display_pixels(result, display_layer, channels);
+          const std::string path = display_pattern->path(w.frame);
+          batch.add(io::write_display_temporary(
+                        path, px, channels, result.width, result.height, *display,
+                        "hbil " + display_layer + ", frame " + std::to_string(w.frame)),
+                    path);
         }
-        std::snprintf(line, sizeof line, "hbil: frame %d (%zu/%zu) %.3f s  camera: %s%s", frame,
-                      k + 1 - job.preroll.size(), job.frames.size(), s, cam.source.c_str(),
-                      history.c_str());
-        std::cerr << (tty ? "\r\033[K" : "") << line << (tty ? "" : "\n") << std::flush;
-      }
+        w.write_ms = ms(t_write, Clock::now());
+        return w;
+      });
     }
+    if (writing.valid()) report(writing.get());
     batch.commit();
   } catch (...) {
     if (tty && !o.quiet) std::cerr << "\n";

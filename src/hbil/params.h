@@ -66,6 +66,10 @@ struct Params {
   // "auto": ao, bentcone, and irradiance, indirect and composite when the input has the
   // colour passes they need (see resolve_outputs); may be combined with explicit names.
   std::vector<std::string> outputs = {"auto"};
+  // EXR compression of the output frames: "zip", "zips", "piz", "dwaa" (lossy on channels
+  // ending in R, G, B or Y, so on data layers too), "none".
+  std::string compression = "piz";
+  bool colour_half = true;  // colour layers as half floats (data layers stay 32-bit float)
 
   static std::map<std::string, nlohmann::json> default_passes();
   // Number of slice directions one pixel's result integrates (after re-interleaving).
@@ -86,6 +90,8 @@ const std::vector<ParamInfo>& params_table();
 // The G-buffer fields a preset may map, and the outputs hbil can write.
 const std::vector<std::string>& gbuffer_fields();
 const std::vector<std::string>& known_outputs();
+// The values of the key compression.
+const std::vector<std::string>& output_compressions();
 
 // The outputs "auto" stands for, in order.
 const std::vector<std::string>& auto_outputs();

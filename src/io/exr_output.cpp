@@ -108,6 +108,19 @@ std::string write_temporary(const std::string& final_path, const OutputImage& im
   std::error_code ec;
   OIIO::ImageSpec spec(img.width, img.height, int(img.channels.size()), OIIO::TypeDesc::FLOAT);
   spec.channelnames = img.channels;
+  // Colour layers as half where the preset says so; data layers (ao, bentcone, history)
+  // always 32-bit.
+  if (p.colour_half) {
+    bool any_half = false;
+    for (const std::string& ch : img.channels) {
+      const std::string layer = ch.substr(0, ch.find('.'));
+      const bool colour = layer == "irradiance" || layer == "indirect" || layer == "farfield" ||
+                          layer == "composite";
+      spec.channelformats.push_back(colour ? OIIO::TypeDesc::HALF : OIIO::TypeDesc::FLOAT);
+      any_half |= colour;
+    }
+    if (!any_half) spec.channelformats.clear();
+  }
   spec.alpha_channel = -1;
   spec.z_channel = -1;
   // The input's metadata first (stamp, cycles.*, ...), minus what describes its storage.
@@ -119,7 +132,7 @@ std::string write_temporary(const std::string& final_path, const OutputImage& im
       continue;
     spec.attribute(name, a.type(), a.data());
   }
-  spec.attribute("compression", "zip");
+  spec.attribute("compression", p.compression);
   spec.attribute("hbil:version", HBIL_VERSION);
   spec.attribute("hbil:preset", to_json(p).dump());
   spec.attribute("hbil:camera", camera_json(cam));

@@ -1,6 +1,7 @@
 // exr_output.h: writing hbil's multi-layer EXR frames.
 //
-// One single-part scanline EXR per frame, ZIP compressed, 32-bit float, channels named
+// One single-part scanline EXR per frame, compressed as the preset says (compression), colour
+// layers as half floats unless colour_half is false, data layers 32-bit float, channels named
 // <layer>.<chan> (ao.Y, bentcone.X/Y/Z/W). The input's header attributes are copied
 // through; hbil adds hbil:version, hbil:preset (the effective parameters as JSON),
 // hbil:camera (the camera used, JSON) and the standard worldToCamera / worldToNDC.
