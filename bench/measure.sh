@@ -6,7 +6,6 @@
 #   HELDOUT_MOVE=dir HELDOUT_CUT=dir bench/measure.sh   also run the temporal chain on camera
 #       moves rendered with samples/blender/study_shots.py (--shot move, frames 1-16; --shot cut,
 #       frames 1-12), which nothing was tuned on
-#   SKIP_HD=1 bench/measure.sh            skip the 1920x1080 timings
 #   ONLY_POVRAY=1 bench/measure.sh        only the POV-Ray tables
 #   HELDOUT_POV=/tmp/pov_study bench/measure.sh   also the held-out POV-Ray scene
 #       (samples/povray/study.pov, rendered as its header says); HELDOUT_POV_NOSKY=dir adds
@@ -292,27 +291,4 @@ if [ -n "${HELDOUT_CUT:-}" ]; then
   echo "- single frames: $(per_frame hc-single "$ct_in") dB"
 fi
 
-[ -n "${SKIP_HD:-}" ] && exit 0
-# 1920x1080: frames 1-4 of room_poles upscaled, sidecars adjusted to the new resolution
-# (timing only: upscaling blurs silhouettes, so no accuracy is claimed there).
-mkdir -p "$tmp/hd"
-for f in 1 2 3 4; do
-  n=$(printf %04d $f)
-  oiiotool "samples/room_poles/frame_$n.exr" --resize 1920x1080 -o "$tmp/hd/frame_$n.exr"
-  python3 - "samples/room_poles/frame_$n.camera.json" "$tmp/hd/frame_$n.camera.json" <<'PY'
-import json, sys
-j = json.load(open(sys.argv[1])); j["resolution"] = [1920, 1080]
-json.dump(j, open(sys.argv[2], "w"))
-PY
-done
-echo
-echo "1920x1080 (room_poles frames 1-4 upscaled), s/frame (temporal chain on):"
-echo
-echo "| preset | ao + bentcone | default outputs |"
-echo "|---|---|---|"
-for preset in fast default quality; do
-  a=$(run "hd-ao-$preset" "$tmp/hd/frame_####.exr" --preset "presets/$preset.json" \
-    --set 'outputs=["ao","bentcone"]')
-  g=$(run "hd-gi-$preset" "$tmp/hd/frame_####.exr" --preset "presets/$preset.json")
-  echo "| $preset | $a | $g |"
-done
+# Speed at 256x144, 1920x1080 and 3840x2160 on real renders: bench/speed.sh.

@@ -49,10 +49,18 @@ PixelSums march_bitmask_pixel(const SampleView& view, int i, int j, const Vec3& 
     for (int side = 0; side < 2; ++side) {
       const float sx = side == 0 ? L.dx : -L.dx, sy = side == 0 ? L.dy : -L.dy;
       const float sign = side == 0 ? 1.f : -1.f;  // θ > 0 on the +D side
-      // The signed angle from ω_o of the direction from P to X.
-      auto angle = [&](const Vec3& X) {
+      // Occluder extents are compared by a key of the direction from P to X that is monotone
+      // in cos ∠(ω_o, X − P), cos |cos| = c|c| / |X − P|² (no square root), and only the
+      // two extremes become angles: θ = sign · acos(cos), so on the + side the largest cos
+      // is the lowest θ, on the − side the highest.
+      auto key = [&](const Vec3& X) {
         const Vec3 d = X - P;
-        return sign * fast_acos(std::clamp(dot(d, f.wo) / length(d), -1.f, 1.f));
+        const float c = dot(d, f.wo);
+        return c * std::fabs(c) / dot(d, d);
+      };
+      auto angle_of_key = [&](float q) {
+        const float c = q < 0.f ? -std::sqrt(-q) : std::sqrt(q);
+        return sign * fast_acos(std::clamp(c, -1.f, 1.f));
       };
       for (int k = 0; k < n_steps; ++k) {
         const bool near = k < c.steps;
@@ -69,20 +77,24 @@ PixelSums march_bitmask_pixel(const SampleView& view, int i, int j, const Vec3& 
         const Vec3 ray = f.ray_P + L.dv * (sign * o) * float(view.stride);
         const Vec3& n_s = view.normal[k_s];
         const float denom = dot(ray, n_s);
-        if (std::fabs(denom) > kGrazing * length(ray)) S = ray * (dot(S, n_s) / denom);
+        if (denom * denom > kGrazing2 * dot(ray, ray)) S = ray * (dot(S, n_s) / denom);
         const Vec3 d3 = S - P;  // background has z = 3e38, n = 0: |d3| > radius
         const float dist2 = dot(d3, d3);
         if (!(dist2 < rg2) || dist2 <= 0.f) continue;
         const bool in_ao = near && dist2 < r2;
-        const float dist = std::sqrt(dist2);
-        const float theta_f = sign * fast_acos(std::clamp(dot(d3, f.wo) / dist, -1.f, 1.f));
+        const float c_f = dot(d3, f.wo);
+        const float key_f = c_f * std::fabs(c_f) / dist2;
         // Algorithm 1: the sample is an occluder of thickness t along its view ray; it covers
         // [θf, θb] and lights the sectors it newly covers. Thickness: measured (back faces)
         // where known, else the constant heuristic.
         const bool measured = view.thickness && view.thickness[k_s] >= 0.f;
         const float t = measured ? view.thickness[k_s] : c.thickness + c.thickness_growth * S.z;
-        const float theta_b = angle(S + S * (t / length(S)));
-        float th_lo = std::min(theta_f, theta_b), th_hi = std::max(theta_f, theta_b);
+        float key_hi = key_f, key_lo = key_f;  // the largest and smallest key covered
+        auto cover = [&](float q) {
+          key_hi = key_hi < q ? q : key_hi;
+          key_lo = q < key_lo ? q : key_lo;
+        };
+        cover(key(S + S * (t / length(S))));
         if (measured) {
           // A measured thickness is the object's own, so the sample must also stand for the
           // surface between it and its neighbours, which a point misses (light would leak
@@ -108,14 +120,15 @@ PixelSums march_bitmask_pixel(const SampleView& view, int i, int j, const Vec3& 
           for (float oo : {lo_o, hi_o}) {
             const Vec3 r = f.ray_P + L.dv * (sign * oo) * float(view.stride);
             const float den = dot(r, n_s);
-            if (!(std::fabs(den) > kGrazing * length(r))) continue;
+            if (!(den * den > kGrazing2 * dot(r, r))) continue;
             const Vec3 X = r * (plane / den);
             if (!(X.z > 0.f)) continue;
-            const float a = angle(X), b = angle(X + X * (t / length(X)));
-            th_lo = std::min(th_lo, std::min(a, b));
-            th_hi = std::max(th_hi, std::max(a, b));
+            cover(key(X));
+            cover(key(X + X * (t / length(X))));
           }
         }
+        const float th_lo = angle_of_key(side == 0 ? key_hi : key_lo);
+        const float th_hi = angle_of_key(side == 0 ? key_lo : key_hi);
         const float lo = (th_lo - sector0) / kSectorWidth;
         const float hi = (th_hi - sector0) / kSectorWidth;
         // "Round" criterion: a sector counts when at least half covered.
@@ -133,7 +146,7 @@ PixelSums march_bitmask_pixel(const SampleView& view, int i, int j, const Vec3& 
             const int q = std::countr_zero(fresh);
             w += bound[q + 1].ao - bound[q].ao;
           }
-          irradiance += view.radiance[k_s] * facing_weight(n_s, d3 / dist) * w;
+          irradiance += view.radiance[k_s] * facing_weight(n_s, d3 / std::sqrt(dist2)) * w;
         }
       }
     }

@@ -62,12 +62,6 @@ HWY_INLINE VF Clamp(VF v, VF lo, VF hi) {
   // std::clamp(v, lo, hi) = v < lo ? lo : (hi < v ? hi : v)
   return hn::IfThenElse(hn::Lt(v, lo), lo, hn::IfThenElse(hn::Lt(hi, v), hi, v));
 }
-HWY_INLINE VF MinStd(VF a, VF b) {  // std::min(a, b) = b < a ? b : a
-  return hn::IfThenElse(hn::Lt(b, a), b, a);
-}
-HWY_INLINE VF MaxStd(VF a, VF b) {  // std::max(a, b) = a < b ? b : a
-  return hn::IfThenElse(hn::Lt(a, b), b, a);
-}
 // march::fast_acos, lane by lane.
 HWY_INLINE VF FastAcos(DF d, VF x) {
   const VF a = hn::Abs(x);
@@ -116,7 +110,7 @@ void MarchBitmaskRow(const SampleView& view, int i0, int j, int count, const flo
   const float diagonal = std::hypot(float(view.width), float(view.height));
   const VF zero = hn::Zero(d), one = hn::Set(d, 1.f), half = hn::Set(d, 0.5f);
   const VF stride = hn::Set(d, float(view.stride));
-  const VF grazing = hn::Set(d, kGrazing);
+  const VF grazing2 = hn::Set(d, kGrazing2);
   const VI lane = hn::Iota(di, 0);
   const MF none = hn::FirstN(d, 0);
 
@@ -209,10 +203,16 @@ void MarchBitmaskRow(const SampleView& view, int i0, int j, int count, const flo
         const float sgn_side = side == 0 ? 1.f : -1.f;
         const VF sign = hn::Set(d, sgn_side);
         const VF sx = side == 0 ? dx : hn::Neg(dx), sy = side == 0 ? dy : hn::Neg(dy);
-        auto angle = [&](const V3& X) {
+        // key(X) = c|c| / |X − P|², c = (X − P)·ω_o (march_bitmask.cpp).
+        auto key = [&](const V3& X) {
           const V3 dd = Sub3(X, P);
-          const VF cosv = hn::Div(Dot(dd, wo), hn::Sqrt(Dot(dd, dd)));
-          return hn::Mul(sign, FastAcos(d, Clamp(cosv, hn::Set(d, -1.f), one)));
+          const VF cv = Dot(dd, wo);
+          return hn::Div(hn::Mul(cv, hn::Abs(cv)), Dot(dd, dd));
+        };
+        auto angle_of_key = [&](VF q) {
+          const VF r = hn::Sqrt(hn::Abs(q));
+          const VF cv = hn::IfThenElse(hn::Lt(q, zero), hn::Neg(r), r);
+          return hn::Mul(sign, FastAcos(d, Clamp(cv, hn::Set(d, -1.f), one)));
         };
         auto ray_at = [&](VF o) {  // f.ray_P + L.dv * (sign * o) * float(view.stride)
           return Add3(ray_P, Scale(Scale(dv, hn::Mul(sign, o)), stride));
@@ -244,16 +244,15 @@ void MarchBitmaskRow(const SampleView& view, int i0, int j, int count, const flo
           const V3 n_s = Gather3(d, view.normal, k3);
           const V3 ray = ray_at(o);
           const VF denom = Dot(ray, n_s);
-          const MF steep = hn::Gt(hn::Abs(denom), hn::Mul(grazing, hn::Sqrt(Dot(ray, ray))));
+          const MF steep = hn::Gt(hn::Mul(denom, denom), hn::Mul(grazing2, Dot(ray, ray)));
           S = Select(steep, Scale(ray, hn::Div(Dot(S, n_s), denom)), S);
           const V3 d3 = Sub3(S, P);
           const VF dist2 = Dot(d3, d3);
           m = hn::And(m, hn::And(hn::Lt(dist2, hn::Set(d, rg2)), hn::Gt(dist2, zero)));
           if (hn::AllFalse(d, m)) continue;
           const MF in_ao = near ? hn::And(m, hn::Lt(dist2, hn::Set(d, r2))) : none;
-          const VF dist = hn::Sqrt(dist2);
-          const VF theta_f =
-              hn::Mul(sign, FastAcos(d, Clamp(hn::Div(Dot(d3, wo), dist), hn::Set(d, -1.f), one)));
+          const VF c_f = Dot(d3, wo);
+          const VF key_f = hn::Div(hn::Mul(c_f, hn::Abs(c_f)), dist2);
           MF measured = none;
           VF t = hn::Add(hn::Set(d, c.thickness), hn::Mul(hn::Set(d, c.thickness_growth), S.z));
           if (view.thickness) {
@@ -261,8 +260,13 @@ void MarchBitmaskRow(const SampleView& view, int i0, int j, int count, const flo
             measured = hn::And(m, hn::Ge(th, zero));
             t = hn::IfThenElse(measured, th, t);
           }
-          const VF theta_b = angle(Add3(S, Scale(S, hn::Div(t, hn::Sqrt(Dot(S, S))))));
-          VF th_lo = MinStd(theta_f, theta_b), th_hi = MaxStd(theta_f, theta_b);
+          VF key_hi = key_f, key_lo = key_f;
+          auto cover = [&](VF q, MF where) {
+            key_hi = hn::IfThenElse(hn::And(where, hn::Lt(key_hi, q)), q, key_hi);
+            key_lo = hn::IfThenElse(hn::And(where, hn::Lt(q, key_lo)), q, key_lo);
+          };
+          const MF all_lanes = hn::FirstN(d, N);
+          cover(key(Add3(S, Scale(S, hn::Div(t, hn::Sqrt(Dot(S, S)))))), all_lanes);
           if (!hn::AllFalse(d, measured)) {
             const VF o_prev = k == 0 ? zero : hn::Min(offset(k - 1), o);
             const VF lo_o = hn::Mul(half, hn::Add(o, o_prev));
@@ -273,17 +277,16 @@ void MarchBitmaskRow(const SampleView& view, int i0, int j, int count, const flo
             for (const VF& oo : {lo_o, hi_o}) {
               const V3 r = ray_at(oo);
               const VF den = Dot(r, n_s);
-              MF ok =
-                  hn::And(measured, hn::Gt(hn::Abs(den), hn::Mul(grazing, hn::Sqrt(Dot(r, r)))));
+              MF ok = hn::And(measured, hn::Gt(hn::Mul(den, den), hn::Mul(grazing2, Dot(r, r))));
               const V3 X = Scale(r, hn::Div(plane, den));
               ok = hn::And(ok, hn::Gt(X.z, zero));
               if (hn::AllFalse(d, ok)) continue;
-              const VF a = angle(X);
-              const VF b = angle(Add3(X, Scale(X, hn::Div(t, hn::Sqrt(Dot(X, X))))));
-              th_lo = hn::IfThenElse(ok, MinStd(th_lo, MinStd(a, b)), th_lo);
-              th_hi = hn::IfThenElse(ok, MaxStd(th_hi, MaxStd(a, b)), th_hi);
+              cover(key(X), ok);
+              cover(key(Add3(X, Scale(X, hn::Div(t, hn::Sqrt(Dot(X, X)))))), ok);
             }
           }
+          const VF th_lo = angle_of_key(side == 0 ? key_hi : key_lo);
+          const VF th_hi = angle_of_key(side == 0 ? key_lo : key_hi);
           const VF width = hn::Set(d, kSectorWidth);
           const VI a = SectorIndex(d, hn::Div(hn::Sub(th_lo, sector0), width));
           const VI b = SectorIndex(d, hn::Div(hn::Sub(th_hi, sector0), width));
@@ -318,6 +321,7 @@ void MarchBitmaskRow(const SampleView& view, int i0, int j, int count, const flo
             fresh = hn::And(fresh, hn::Sub(fresh, hn::Set(du, 1u)));
           }
           // view.radiance[k_s] * facing_weight(n_s, d3 / dist) * w
+          const VF dist = hn::Sqrt(dist2);
           const V3 wi{hn::Div(d3.x, dist), hn::Div(d3.y, dist), hn::Div(d3.z, dist)};
           VF x = hn::Div(hn::Add(hn::Neg(Dot(n_s, wi)), hn::Set(d, 0.1f)), hn::Set(d, 0.2f));
           x = Clamp(x, zero, one);

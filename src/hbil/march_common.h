@@ -21,6 +21,7 @@ inline float sgn(float t) {
 // correction is unstable (silhouettes, poles seen side-on) and the sample is used as is.
 // Chosen by hand on the samples' poles (0.05-0.2 change AO by < 0.001 RMS); not tuned.
 constexpr float kGrazing = 0.1f;
+constexpr float kGrazing2 = kGrazing * kGrazing;  // the same test on squares
 // acos to 7e-5 rad (Abramowitz & Stegun 4.4.45), well under the bitmask's sector width of
 // π/32 = 0.098 rad: every angle of the bitmask method is only quantised to sectors.
 inline float fast_acos(float x) {

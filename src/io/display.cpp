@@ -241,6 +241,7 @@ std::string write_display_temporary(const std::string& final_path, const std::ve
   spec.z_channel = -1;
   if (exr) spec.attribute("compression", "zip");
   if (jpeg) spec.attribute("compression", "jpeg:95");
+  if (!exr && !jpeg) spec.attribute("png:compressionLevel", 1);
   // Colour and alpha are written as they are (straight alpha): no (de)association.
   if (fc == 4) spec.attribute("oiio:UnassociatedAlpha", 1);
   spec.attribute("Software", "hbil " HBIL_VERSION);
