@@ -326,8 +326,9 @@ TEST_F(ExrFrame, BackFaceLayerIsReadForTheBitmaskOnly) {
   ASSERT_TRUE(f.has("backdepth"));
   EXPECT_EQ(f.spec.channelnames[f.channels.at("backdepth")[0]], "BackFaces.Depth.Z");
   ASSERT_EQ(p.method, "bitmask");
+  // (position: the frame has no camera sidecar, so the camera will be solved from it.)
   EXPECT_EQ(fields_needed(f, p),
-            (std::vector<std::string>{"depth", "normal", "backdepth", "alpha"}));
+            (std::vector<std::string>{"depth", "position", "normal", "backdepth", "alpha"}));
   const GBuffer g = read_fields(f, fields_needed(f, p), p);
   ASSERT_EQ(g.backdepth.size(), g.pixels());
   EXPECT_EQ(g.backdepth[3 * kW + 5], depth_at(5, 3) + 0.5f);
@@ -335,7 +336,8 @@ TEST_F(ExrFrame, BackFaceLayerIsReadForTheBitmaskOnly) {
 
   Params horizon = p;
   horizon.method = "horizon";  // thickness means nothing to the horizon method
-  EXPECT_EQ(fields_needed(f, horizon), (std::vector<std::string>{"depth", "normal", "alpha"}));
+  EXPECT_EQ(fields_needed(f, horizon),
+            (std::vector<std::string>{"depth", "position", "normal", "alpha"}));
   Params off = apply_set(p, "passes.backdepth=\"\"");
   const InputFrame f_off = open_frame(path, 3, off);
   EXPECT_FALSE(f_off.has("backdepth"));
@@ -386,9 +388,10 @@ TEST_F(ExrFrame, CameraSolvedFromPositionWithoutSidecar) {
   const Params p;
   const InputFrame f = open_frame(path, 1, p);
   GBuffer g = read_fields(f, fields_needed(f, p), p);
-  ASSERT_TRUE(g.position.empty());
+  // Without a sidecar or camera attributes, Position is read with the other fields (one
+  // pass over the file), for the solve.
+  ASSERT_EQ(g.position.size(), g.pixels()) << "Position is read for the solve";
   const Camera cam = find_camera(f, g, p);
-  EXPECT_EQ(g.position.size(), g.pixels()) << "Position is read for the solve";
   EXPECT_TRUE(contains(cam.source, "solved from Position")) << cam.source;
   EXPECT_GT(cam.reprojection_rms_px, 0.0);
   EXPECT_LT(cam.reprojection_rms_px, kSolvedRmsPx);

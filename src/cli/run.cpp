@@ -112,8 +112,10 @@ std::string shipped_ocio_config() {
   return HBIL_OCIO_CONFIG;
 }
 
-// The pixels of a display layer: 1 (ao), 3 or 4 (composite) channels.
-std::vector<float> display_pixels(const AoFrame& f, const std::string& layer, int& channels) {
+// The pixels of a display layer: 1 (ao), 3 or 4 (composite) channels; the frame's own
+// buffer where it is stored that way, else `scratch` filled.
+const std::vector<float>& display_pixels(const AoFrame& f, const std::string& layer, int& channels,
+                                         std::vector<float>& scratch) {
   const size_t n = size_t(f.width) * f.height;
   if (layer == "composite") {
     channels = 4;
@@ -128,10 +130,10 @@ std::vector<float> display_pixels(const AoFrame& f, const std::string& layer, in
                                : layer == "indirect"   ? f.indirect
                                                        : f.farfield;
   channels = 3;
-  std::vector<float> out(n * 3);
+  scratch.resize(n * 3);
   for (size_t i = 0; i < n; ++i)
-    out[3 * i] = v[i].x, out[3 * i + 1] = v[i].y, out[3 * i + 2] = v[i].z;
-  return out;
+    scratch[3 * i] = v[i].x, scratch[3 * i + 1] = v[i].y, scratch[3 * i + 2] = v[i].z;
+  return scratch;
 }
 
 std::string join_outputs(const std::vector<std::string>& v) {
@@ -343,11 +345,11 @@ void run(const RunOptions& o) {
                                                 cam = cur.cam]() mutable {
         const auto t_write = Clock::now();
         const std::string out_path = job.out.path(w.frame);
-        batch.add(io::write_temporary(out_path, io::make_output(result, p), spec, p, cam),
-                  out_path);
+        batch.add(io::write_temporary(out_path, result, spec, p, cam), out_path);
         if (display) {
           int channels = 0;
-          const std::vector<float> px = display_pixels(result, display_layer, channels);
+          std::vector<float> scratch;
+          const std::vector<float>& px = display_pixels(result, display_layer, channels, scratch);
           const std::string path = display_pattern->path(w.frame);
           batch.add(io::write_display_temporary(
                         path, px, channels, result.width, result.height, *display,

@@ -723,9 +723,12 @@ Camera solve_camera_from_positions(int width, int height, const std::vector<Vec3
     throw Error(Exit::failure, "solve_camera_from_positions: " + std::to_string(positions.size()) +
                                    " positions for " + std::to_string(width) + "x" +
                                    std::to_string(height) + " pixels");
+  // Pixels on a regular lattice of about 4 x kSolveMaxPixels first (a full scan of a large
+  // frame costs more than the solve), then an even subset of the usable ones.
+  const int step = std::max(1, int(std::sqrt(double(width) * height / (4.0 * kSolveMaxPixels))));
   std::vector<Observation> usable;
-  for (int row = 0; row < height; ++row) {
-    for (int col = 0; col < width; ++col) {
+  for (int row = step / 2; row < height; row += step) {
+    for (int col = step / 2; col < width; col += step) {
       const Vec3& p = positions[size_t(row) * width + col];
       if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) continue;
       if (p.x == 0 && p.y == 0 && p.z == 0) continue;  // background

@@ -84,7 +84,10 @@ void set_camera_attributes(OIIO::ImageSpec& spec, const Camera& camera);
 // Throws Exit::camera with fewer than kSolveMinPixels usable pixels or inliers, or when the
 // points are (nearly) coplanar or collinear.
 inline constexpr int kSolveMinPixels = 100;
-inline constexpr int kSolveMaxPixels = 200000;
+// 20000: on the 1920x1080 renders of the samples the camera solved from 200000 pixels and
+// from 20000 differ by < 0.01 px in reprojection (tests/camera_io_test.cpp), at a tenth of
+// the time.
+inline constexpr int kSolveMaxPixels = 20000;
 Camera solve_camera_from_positions(int width, int height, const std::vector<Vec3>& positions);
 
 }  // namespace hbil::io

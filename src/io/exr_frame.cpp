@@ -142,11 +142,11 @@ std::vector<std::string> fields_needed(const InputFrame& f, const Params& reques
       throw Error(Exit::missing_pass, f.where() + ": missing pass: normal (looked for channels " +
                                           join(f.wanted.at("normal")) +
                                           "; map it with passes.normal)");
-    if (f.has("depth"))
-      need.push_back("depth");
-    else if (f.has("position"))
-      need.push_back("position");
-    else
+    if (f.has("depth")) need.push_back("depth");
+    if (f.has("position") && (!f.has("depth") || (!fs::exists(sidecar_path_for(f.path)) &&
+                                                  !camera_from_exr_attributes(f.spec))))
+      need.push_back("position");  // the geometry, or the camera solved from it (find_camera)
+    if (!f.has("depth") && !f.has("position"))
       throw Error(Exit::missing_pass, f.where() + ": missing pass: depth or position (looked for " +
                                           join(f.wanted.at("depth")) + " and " +
                                           join(f.wanted.at("position")) +

@@ -3,6 +3,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <filesystem>
 #include <nlohmann/json.hpp>
@@ -14,32 +15,25 @@ namespace hbil::io {
 
 namespace fs = std::filesystem;
 
-OutputImage make_output(const AoFrame& f, const Params& p) {
-  OutputImage img;
-  img.width = f.width;
-  img.height = f.height;
+std::vector<std::string> output_channels(const AoFrame& f, const Params& p) {
+  std::vector<std::string> ch;
   for (const auto& o : p.outputs) {
-    if (o == "ao" && f.ao_rgb.empty()) img.channels.push_back("ao.Y");
-    if (o == "ao" && !f.ao_rgb.empty())
-      img.channels.insert(img.channels.end(), {"ao.R", "ao.G", "ao.B"});
-    if (o == "farfield")
-      img.channels.insert(img.channels.end(), {"farfield.R", "farfield.G", "farfield.B"});
+    if (o == "ao" && f.ao_rgb.empty()) ch.push_back("ao.Y");
+    if (o == "ao" && !f.ao_rgb.empty()) ch.insert(ch.end(), {"ao.R", "ao.G", "ao.B"});
+    if (o == "farfield") ch.insert(ch.end(), {"farfield.R", "farfield.G", "farfield.B"});
     if (o == "composite")
-      img.channels.insert(img.channels.end(),
-                          {"composite.R", "composite.G", "composite.B", "composite.A"});
+      ch.insert(ch.end(), {"composite.R", "composite.G", "composite.B", "composite.A"});
     if (o == "bentcone")
-      img.channels.insert(img.channels.end(),
-                          {"bentcone.X", "bentcone.Y", "bentcone.Z", "bentcone.W"});
-    if (o == "irradiance")
-      img.channels.insert(img.channels.end(), {"irradiance.R", "irradiance.G", "irradiance.B"});
-    if (o == "indirect")
-      img.channels.insert(img.channels.end(), {"indirect.R", "indirect.G", "indirect.B"});
-    if (o == "history") img.channels.push_back("history.Y");
+      ch.insert(ch.end(), {"bentcone.X", "bentcone.Y", "bentcone.Z", "bentcone.W"});
+    if (o == "irradiance") ch.insert(ch.end(), {"irradiance.R", "irradiance.G", "irradiance.B"});
+    if (o == "indirect") ch.insert(ch.end(), {"indirect.R", "indirect.G", "indirect.B"});
+    if (o == "history") ch.push_back("history.Y");
   }
-  const size_t n = img.channels.size(), pixels = size_t(f.width) * f.height;
-  img.pixels.resize(pixels * n);
-  for (size_t i = 0; i < pixels; ++i) {
-    float* px = &img.pixels[i * n];
+  return ch;
+}
+
+void output_rows(const AoFrame& f, const Params& p, int y0, int y1, float* px) {
+  for (size_t i = size_t(y0) * f.width; i < size_t(y1) * f.width; ++i)
     for (const auto& o : p.outputs) {
       if (o == "ao" && f.ao_rgb.empty()) *px++ = f.ao[i];
       if (o == "history") *px++ = f.history.empty() ? 1.f : f.history[i];
@@ -62,8 +56,6 @@ OutputImage make_output(const AoFrame& f, const Params& p) {
           *px++ = (*rgb)[i].z;
         }
     }
-  }
-  return img;
 }
 
 std::string camera_json(const Camera& c) {
@@ -101,18 +93,19 @@ std::string prepare_temporary(const std::string& final_path, const std::string& 
   return (final_p.parent_path() / name).string();
 }
 
-std::string write_temporary(const std::string& final_path, const OutputImage& img,
+std::string write_temporary(const std::string& final_path, const AoFrame& f,
                             const OIIO::ImageSpec& input_header, const Params& p,
                             const Camera& cam) {
   const fs::path tmp = prepare_temporary(final_path);
   std::error_code ec;
-  OIIO::ImageSpec spec(img.width, img.height, int(img.channels.size()), OIIO::TypeDesc::FLOAT);
-  spec.channelnames = img.channels;
+  const std::vector<std::string> channels = output_channels(f, p);
+  OIIO::ImageSpec spec(f.width, f.height, int(channels.size()), OIIO::TypeDesc::FLOAT);
+  spec.channelnames = channels;
   // Colour layers as half where the preset says so; data layers (ao, bentcone, history)
   // always 32-bit.
   if (p.colour_half) {
     bool any_half = false;
-    for (const std::string& ch : img.channels) {
+    for (const std::string& ch : channels) {
       const std::string layer = ch.substr(0, ch.find('.'));
       const bool colour = layer == "irradiance" || layer == "indirect" || layer == "farfield" ||
                           layer == "composite";
@@ -141,8 +134,16 @@ std::string write_temporary(const std::string& final_path, const OutputImage& im
   auto out = OIIO::ImageOutput::create(tmp.string());
   if (!out)
     throw Error(Exit::output, final_path + ": cannot create an EXR writer: " + OIIO::geterror());
-  if (!out->open(tmp.string(), spec) ||
-      !out->write_image(OIIO::TypeDesc::FLOAT, img.pixels.data()) || !out->close()) {
+  // Written in strips of rows, so that no second copy of the whole frame is made.
+  constexpr int kStrip = 64;
+  std::vector<float> strip(size_t(kStrip) * f.width * channels.size());
+  bool ok = out->open(tmp.string(), spec);
+  for (int y0 = 0; ok && y0 < f.height; y0 += kStrip) {
+    const int y1 = std::min(y0 + kStrip, f.height);
+    output_rows(f, p, y0, y1, strip.data());
+    ok = out->write_scanlines(y0, y1, 0, OIIO::TypeDesc::FLOAT, strip.data());
+  }
+  if (!ok || !out->close()) {
     const std::string why = out->geterror();
     fs::remove(tmp, ec);
     throw Error(Exit::output, final_path + ": cannot write: " + why);

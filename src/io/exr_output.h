@@ -24,21 +24,17 @@
 
 namespace hbil::io {
 
-struct OutputImage {
-  int width = 0, height = 0;
-  std::vector<std::string> channels;
-  std::vector<float> pixels;  // interleaved, channels.size() per pixel, rows top-down
-};
-
-// The requested layers of an AO frame, in the order of Params::outputs.
-OutputImage make_output(const AoFrame& f, const Params& p);
+// The channels of the requested layers, in the order of Params::outputs.
+std::vector<std::string> output_channels(const AoFrame& f, const Params& p);
+// Rows [y0, y1) of the output, interleaved in output_channels' order, into dst.
+void output_rows(const AoFrame& f, const Params& p, int y0, int y1, float* dst);
 
 // The camera as the JSON stored in hbil:camera.
 std::string camera_json(const Camera& c);
 
-// Writes `img` to a temporary file beside `final_path` (creating its folder) and returns
-// the temporary's path. Throws Error(Exit::output).
-std::string write_temporary(const std::string& final_path, const OutputImage& img,
+// Writes the requested layers of `f` to a temporary file beside `final_path` (creating its
+// folder) and returns the temporary's path. Throws Error(Exit::output).
+std::string write_temporary(const std::string& final_path, const AoFrame& f,
                             const OIIO::ImageSpec& input_header, const Params& p,
                             const Camera& cam);
 
