@@ -17,14 +17,8 @@ PixelSums march_bitmask_pixel(const SampleView& view, int i, int j, const Vec3& 
                               const float* phi, int n_slices, const float* fraction,
                               const HorizonConfig& c) {
   PixelSums acc;
-  const bool gather = view.radiance != nullptr;
-  // The gather may reach beyond the AO radius: gather_steps more samples per side between
-  // the two radii, which only the gather sees (AO is the same with or without them).
-  const bool far = gather && c.gather_steps > 0;
-  const PixelFrame f = pixel_frame(view, P, c, far);
-  const float r2 = c.radius * c.radius;
-  const float rg2 = far ? c.gather_radius * c.gather_radius : r2;
-  const int n_steps = c.steps + (far ? c.gather_steps : 0);
+  const MarchSetup m = march_setup(view, P, c);
+  const PixelFrame& f = m.f;
   const float cd = std::cos(kSectorWidth), sd = std::sin(kSectorWidth);
   for (int s = 0; s < n_slices; ++s) {
     SliceLine L;
@@ -62,33 +56,23 @@ PixelSums march_bitmask_pixel(const SampleView& view, int i, int j, const Vec3& 
         const float c = q < 0.f ? -std::sqrt(-q) : std::sqrt(q);
         return sign * fast_acos(std::clamp(c, -1.f, 1.f));
       };
-      for (int k = 0; k < n_steps; ++k) {
+      for (int k = 0; k < m.n_steps; ++k) {
+        Step st;
+        const StepResult r = take_step(view, i, j, k, sx, sy, sign, P, L, m, c, fraction, st);
+        if (r == StepResult::edge) break;  // screen edge
+        if (r == StepResult::skip) continue;
         const bool near = k < c.steps;
-        if (near && f.r_tex < 1.f) continue;  // the AO radius is under a texel
-        const float o = step_offset(k, c.steps, f.r_tex, f.rg_tex, fraction);
-        const int oi = int(std::floor(sx * o + 0.5f)), oj = int(std::floor(sy * o + 0.5f));
-        if (oi == 0 && oj == 0) continue;
-        const int si = i + oi, sj = j + oj;
-        if (si < 0 || sj < 0 || si >= view.width || sj >= view.height) break;  // screen edge
-        const std::ptrdiff_t k_s = view.index(si, sj);
-        Vec3 S = view.position[k_s];
-        // Move S along its tangent plane onto the ray through the exact point of the line
-        // (see horizon.h): that ray lies in the slice plane.
-        const Vec3 ray = f.ray_P + L.dv * (sign * o) * float(view.stride);
-        const Vec3& n_s = view.normal[k_s];
-        const float denom = dot(ray, n_s);
-        if (denom * denom > kGrazing2 * dot(ray, ray)) S = ray * (dot(S, n_s) / denom);
-        const Vec3 d3 = S - P;  // background has z = 3e38, n = 0: |d3| > radius
-        const float dist2 = dot(d3, d3);
-        if (!(dist2 < rg2) || dist2 <= 0.f) continue;
-        const bool in_ao = near && dist2 < r2;
-        const float c_f = dot(d3, f.wo);
-        const float key_f = c_f * std::fabs(c_f) / dist2;
+        const bool in_ao = near && st.dist2 < m.r2;
+        const float o = st.o;
+        const Vec3& S = st.S;
+        const Vec3& n_s = view.normal[st.k_s];
+        const float c_f = dot(st.d3, f.wo);
+        const float key_f = c_f * std::fabs(c_f) / st.dist2;
         // Algorithm 1: the sample is an occluder of thickness t along its view ray; it covers
         // [θf, θb] and lights the sectors it newly covers. Thickness: measured (back faces)
         // where known, else the constant heuristic.
-        const bool measured = view.thickness && view.thickness[k_s] >= 0.f;
-        const float t = measured ? view.thickness[k_s] : c.thickness + c.thickness_growth * S.z;
+        const bool measured = view.thickness && view.thickness[st.k_s] >= 0.f;
+        const float t = measured ? view.thickness[st.k_s] : c.thickness + c.thickness_growth * S.z;
         float key_hi = key_f, key_lo = key_f;  // the largest and smallest key covered
         auto cover = [&](float q) {
           key_hi = key_hi < q ? q : key_hi;
@@ -111,7 +95,7 @@ PixelSums march_bitmask_pixel(const SampleView& view, int i, int j, const Vec3& 
           // Neighbours within the same group only: the last sample of a group reaches as far
           // beyond itself as its predecessor is before it, never towards the gather-only
           // samples, so ao is the same with or without them.
-          const bool last = k + 1 == (near ? c.steps : n_steps);
+          const bool last = k + 1 == (near ? c.steps : m.n_steps);
           const float hi_o =
               last ? o + 0.5f * (o - o_prev)
                    : 0.5f * (o +
@@ -137,7 +121,7 @@ PixelSums march_bitmask_pixel(const SampleView& view, int i, int j, const Vec3& 
         if (b <= a) continue;
         const std::uint32_t mask = (b - a == 32 ? ~0u : ((1u << (b - a)) - 1u)) << a;
         if (in_ao) occluded |= mask;
-        if (!gather) continue;
+        if (!m.gather) continue;
         std::uint32_t fresh = mask & ~occluded_g;
         occluded_g |= mask;
         if (fresh) {
@@ -146,7 +130,7 @@ PixelSums march_bitmask_pixel(const SampleView& view, int i, int j, const Vec3& 
             const int q = std::countr_zero(fresh);
             w += bound[q + 1].ao - bound[q].ao;
           }
-          irradiance += view.radiance[k_s] * facing_weight(n_s, d3 / std::sqrt(dist2)) * w;
+          irradiance += view.radiance[st.k_s] * facing_weight(n_s, st.d3 / std::sqrt(st.dist2)) * w;
         }
       }
     }

@@ -112,4 +112,56 @@ inline float step_offset(int q, int steps, float r_tex, float rg_tex, const floa
                    : std::max(r_tex, 1.f) + (rg_tex - r_tex) * fraction[q];
 }
 
+// What one pixel's march needs before its slices: whether it gathers light and reaches
+// beyond the AO radius with gather-only samples, the squared radii and the samples per side.
+struct MarchSetup {
+  bool gather = false;  // a radiance source is given
+  bool far = false;     // gather_steps more samples per side between the two radii, which
+                        // only the gather sees (AO is the same with or without them)
+  PixelFrame f;
+  float r2 = 0, rg2 = 0;
+  int n_steps = 0;
+};
+inline MarchSetup march_setup(const SampleView& view, const Vec3& P, const HorizonConfig& c) {
+  MarchSetup m;
+  m.gather = view.radiance != nullptr;
+  m.far = m.gather && c.gather_steps > 0;
+  m.f = pixel_frame(view, P, c, m.far);
+  m.r2 = c.radius * c.radius;
+  m.rg2 = m.far ? c.gather_radius * c.gather_radius : m.r2;
+  m.n_steps = c.steps + (m.far ? c.gather_steps : 0);
+  return m;
+}
+
+// Step k of one side of a slice (sx, sy: its screen direction; sign: +1 on the +D side).
+enum class StepResult { use, skip, edge };
+struct Step {
+  float o = 0;             // offset along the line, texels
+  std::ptrdiff_t k_s = 0;  // the sample's texel
+  Vec3 S, d3;              // the sample, moved onto the slice plane, and S − P
+  float dist2 = 0;         // |d3|²
+};
+inline StepResult take_step(const SampleView& view, int i, int j, int k, float sx, float sy,
+                            float sign, const Vec3& P, const SliceLine& L, const MarchSetup& m,
+                            const HorizonConfig& c, const float* fraction, Step& st) {
+  if (k < c.steps && m.f.r_tex < 1.f) return StepResult::skip;  // AO radius under a texel
+  st.o = step_offset(k, c.steps, m.f.r_tex, m.f.rg_tex, fraction);
+  const int oi = int(std::floor(sx * st.o + 0.5f)), oj = int(std::floor(sy * st.o + 0.5f));
+  if (oi == 0 && oj == 0) return StepResult::skip;
+  const int si = i + oi, sj = j + oj;
+  if (si < 0 || sj < 0 || si >= view.width || sj >= view.height) return StepResult::edge;
+  st.k_s = view.index(si, sj);
+  st.S = view.position[st.k_s];
+  // Move S along its tangent plane onto the ray through the exact point of the line (see
+  // horizon.h): that ray lies in the slice plane.
+  const Vec3 ray = m.f.ray_P + L.dv * (sign * st.o) * float(view.stride);
+  const Vec3& n_s = view.normal[st.k_s];
+  const float denom = dot(ray, n_s);
+  if (denom * denom > kGrazing2 * dot(ray, ray)) st.S = ray * (dot(st.S, n_s) / denom);
+  st.d3 = st.S - P;  // background has z = 3e38, n = 0: |d3| > radius
+  st.dist2 = dot(st.d3, st.d3);
+  if (!(st.dist2 < m.rg2) || st.dist2 <= 0.f) return StepResult::skip;
+  return StepResult::use;
+}
+
 }  // namespace hbil::march
