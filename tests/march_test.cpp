@@ -118,5 +118,40 @@ TEST(MarchSimd, MatchesScalarOnBlenderSample) {
   compare_kernels(v, make_horizon_config(p, cam), &radiance, 2);
 }
 
+// A later bounce summed from the first one's recorded gather equals a new search with its
+// radiance, to the bit, with both marches.
+TEST(GatherRecord, ReplayEqualsANewSearch) {
+  const std::string path = std::string(HBIL_SOURCE_DIR) + "/samples/room_poles/frame_0003.exr";
+  const Params p;
+  const io::InputFrame in = io::open_frame(path, 3, p);
+  GBuffer g = io::read_fields(in, io::fields_needed(in, p), p);
+  const Camera cam = io::find_camera(in, g, p);
+  const ViewGBuffer v = make_view_gbuffer(g, cam, p);
+  std::vector<Vec3> first(g.pixels()), second(g.pixels());
+  for (size_t i = 0; i < g.pixels(); ++i) {
+    first[i] = g.diffdir[i];
+    second[i] = Vec3{float(i % 7) * 0.1f, g.diffcol[i].y, 1.f};
+  }
+  for (bool simd : {true, false}) {
+    SCOPED_TRACE(simd ? "SIMD" : "scalar");
+    HorizonConfig c = make_horizon_config(p, cam);
+    c.vectorised = simd;
+    GatherRecord record;
+    const HorizonImage a = horizon_interleaved(v, c, 2, &first, true, &record);
+    ASSERT_TRUE(record.filled);
+    size_t entries = 0;
+    for (const GatherLog& l : record.rows) entries += l.entries.size();
+    EXPECT_GT(entries, g.pixels()) << "the gather was not logged";
+    expect_identical(a, horizon_interleaved(v, c, 2, &first));
+    const HorizonImage replayed = horizon_interleaved(v, c, 2, &second, true, &record);
+    const HorizonImage marched = horizon_interleaved(v, c, 2, &second);
+    expect_identical(replayed, marched);
+    double diff = 0;
+    for (size_t i = 0; i < g.pixels(); ++i)
+      diff += std::fabs(a.irradiance[i].x - marched.irradiance[i].x);
+    EXPECT_GT(diff, 1.0) << "the two radiances must give different light";
+  }
+}
+
 }  // namespace
 }  // namespace hbil

@@ -63,8 +63,12 @@ HorizonImage search_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& 
   if (in.rotate)
     frame_rotation(in.frame, p.interleave ? 16 * p.slices : p.slices, c.rotation, c.jitter_shift);
   const bool gather = gathers(p);
+  // Later bounces sum the first one's recorded gather with their radiance instead of
+  // marching again (interleaved bitmask search; identical results).
+  GatherRecord record;
+  GatherRecord* reuse = gather && p.bounces > 1 ? &record : nullptr;
   auto search = [&](const std::vector<Vec3>* radiance) {
-    HorizonImage h = p.interleave ? horizon_interleaved(v, c, p.slices, radiance)
+    HorizonImage h = p.interleave ? horizon_interleaved(v, c, p.slices, radiance, true, reuse)
                                   : horizon_full(v, c, p.slices, radiance);
     if (p.interleave && p.spatial_filter) h = spatial_filter(v, h, float(p.depth_tolerance));
     return h;

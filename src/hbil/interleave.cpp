@@ -90,8 +90,11 @@ HorizonImage horizon_full(const ViewGBuffer& g, const HorizonConfig& c, int slic
 }
 
 HorizonImage horizon_interleaved(const ViewGBuffer& g, const HorizonConfig& c, int slices,
-                                 const std::vector<Vec3>* radiance, bool copy_subbuffers) {
-  HorizonImage out = blank(g, radiance != nullptr);
+                                 const std::vector<Vec3>* radiance, bool copy_subbuffers,
+                                 GatherRecord* record) {
+  if (!c.bitmask || !radiance) record = nullptr;
+  const bool replay = record && record->filled;
+  HorizonImage out = replay ? record->first : blank(g, radiance != nullptr);
   // Sub-buffer of phase (ox, oy): texel (i, j) is full-resolution pixel (4i + ox, 4j + oy).
   struct Sub {
     int ox, oy, w, h;
@@ -158,12 +161,26 @@ HorizonImage horizon_interleaved(const ViewGBuffer& g, const HorizonConfig& c, i
   for (int phase = 0; phase < 16; ++phase)
     for (int j = 0; j < subs[phase].h; ++j) tasks.emplace_back(phase, j), ++rows;
   const bool simd = c.bitmask && c.vectorised;
+  if (record && !replay) record->rows.assign(rows, GatherLog{});
   tbb::parallel_for(0, rows, [&](int task) {
     const auto [phase, j] = tasks[task];
     const Sub& s = subs[phase];
+    if (replay) {
+      const GatherLog& log = record->rows[task];
+      size_t entry = 0, count = 0;
+      for (int i = 0; i < s.w; ++i) {
+        const size_t dst = size_t(4 * j + s.oy) * g.width + (4 * i + s.ox);
+        if (g.is_background(dst)) continue;
+        out.irradiance[dst] =
+            replay_gather(log, s.view.radiance, slices, entry, count) / float(slices);
+      }
+      return;
+    }
+    GatherLog* log = record ? &record->rows[task] : nullptr;
     if (simd) {
       std::vector<PixelSums> row(s.w);
-      march_bitmask_row(s.view, 0, j, s.w, s.phi.data(), slices, s.fraction.data(), c, row.data());
+      march_bitmask_row(s.view, 0, j, s.w, s.phi.data(), slices, s.fraction.data(), c, row.data(),
+                        log);
       for (int i = 0; i < s.w; ++i) {
         const size_t dst = size_t(4 * j + s.oy) * g.width + (4 * i + s.ox);
         if (!g.is_background(dst)) store(out, dst, row[i], slices);
@@ -175,10 +192,17 @@ HorizonImage horizon_interleaved(const ViewGBuffer& g, const HorizonConfig& c, i
       if (g.is_background(dst)) continue;
       const Vec3& P = copy_subbuffers ? s.pos[size_t(j) * s.w + i] : g.position[dst];
       const Vec3& n = copy_subbuffers ? s.nrm[size_t(j) * s.w + i] : g.normal[dst];
-      store(out, dst, march_pixel(s.view, i, j, P, n, s.phi.data(), slices, s.fraction.data(), c),
+      store(out, dst,
+            c.bitmask ? march_bitmask_pixel(s.view, i, j, P, n, s.phi.data(), slices,
+                                            s.fraction.data(), c, log)
+                      : march_pixel(s.view, i, j, P, n, s.phi.data(), slices, s.fraction.data(), c),
             slices);
     }
   });
+  if (record && !replay) {
+    record->first = out;
+    record->filled = true;
+  }
   return out;
 }
 

@@ -16,6 +16,7 @@
 
 #include "hbil/gbuffer.h"
 #include "hbil/horizon.h"
+#include "hbil/march.h"
 
 namespace hbil {
 
@@ -38,10 +39,22 @@ float interleaved_jitter(int phase);
 HorizonImage horizon_full(const ViewGBuffer& g, const HorizonConfig& c, int slices,
                           const std::vector<Vec3>* radiance = nullptr);
 
+// What an interleaved bitmask search gathered (march.h, GatherLog: one log per sub-buffer row),
+// and its result, so that the later in-frame bounces of the same frame sum their light
+// without marching again (the geometry, so occlusion and every weight, is the same).
+struct GatherRecord {
+  bool filled = false;
+  std::vector<GatherLog> rows;  // per (phase, row) of the search
+  HorizonImage first;           // the recorded search's result (before the spatial filter)
+};
+
 // The 4x4 interleaved search. With copy_subbuffers = false the sub-buffers are read in place
 // through strided views (the plain version the tests compare the copying one against).
+// `record` (bitmask method with a radiance source; else ignored): when empty, the search
+// fills it; when filled, nothing is marched: ao, vis and bent are the recorded ones and the
+// irradiance is the recorded gather summed with `radiance`, identical to a new search.
 HorizonImage horizon_interleaved(const ViewGBuffer& g, const HorizonConfig& c, int slices,
                                  const std::vector<Vec3>* radiance = nullptr,
-                                 bool copy_subbuffers = true);
+                                 bool copy_subbuffers = true, GatherRecord* record = nullptr);
 
 }  // namespace hbil

@@ -9,9 +9,26 @@
 // See horizon.h for the paper sections and every departure from them.
 #pragma once
 
+#include <cstdint>
+#include <vector>
+
 #include "hbil/horizon.h"
 
 namespace hbil {
+
+// The light a bitmask march gathered, sample by sample, so that a later in-frame bounce (the
+// same geometry, another source radiance) is summed again without marching: per pixel of a
+// run and per slice, the samples whose sectors were newly covered, in march order, with their
+// rejection-filter weight fw (§3.4) and sector weight w (eq. 18). Summing
+// Σ_slices Σ_entries (L[src] · fw) · w in this order gives the march's irradiance to the bit.
+struct GatherEntry {
+  std::uint32_t src;  // the sample's index in the view (SampleView::index)
+  float fw, w;
+};
+struct GatherLog {
+  std::vector<GatherEntry> entries;   // pixel by pixel, slice by slice
+  std::vector<std::uint16_t> counts;  // entries per pixel and slice (n_slices per pixel)
+};
 
 // Marches the slices at rotations phi[0..n) about ω_o (radians; φ = 0 is the slice holding
 // the view-space x axis) for the pixel at texel (i, j) of `view`, with view-space position
@@ -23,14 +40,21 @@ PixelSums march_pixel(const SampleView& view, int i, int j, const Vec3& P, const
 PixelSums march_horizon_pixel(const SampleView& view, int i, int j, const Vec3& P, const Vec3& n,
                               const float* phi, int n_slices, const float* fraction,
                               const HorizonConfig& c);
+// `log` (optional, with a radiance source): appends this pixel's gather (see GatherLog).
 PixelSums march_bitmask_pixel(const SampleView& view, int i, int j, const Vec3& P, const Vec3& n,
                               const float* phi, int n_slices, const float* fraction,
-                              const HorizonConfig& c);
+                              const HorizonConfig& c, GatherLog* log = nullptr);
 
 // The bitmask march of texels (i0 .. i0 + count − 1, j) of `view`, P and n read from the view
 // itself; out[k] receives texel i0 + k's sums. Background texels (P.z >= the background)
-// are left untouched.
+// are left untouched (and log nothing). `log`: as march_bitmask_pixel, texel by texel.
 void march_bitmask_row(const SampleView& view, int i0, int j, int count, const float* phi,
-                       int n_slices, const float* fraction, const HorizonConfig& c, PixelSums* out);
+                       int n_slices, const float* fraction, const HorizonConfig& c, PixelSums* out,
+                       GatherLog* log = nullptr);
+
+// The irradiance sum of one logged pixel with source radiance `radiance` (indexed like the
+// view the log was made on); `entry` and `count` advance past it.
+Vec3 replay_gather(const GatherLog& log, const Vec3* radiance, int n_slices, size_t& entry,
+                   size_t& count);
 
 }  // namespace hbil

@@ -15,14 +15,18 @@ using namespace march;
 
 PixelSums march_bitmask_pixel(const SampleView& view, int i, int j, const Vec3& P, const Vec3& n,
                               const float* phi, int n_slices, const float* fraction,
-                              const HorizonConfig& c) {
+                              const HorizonConfig& c, GatherLog* log) {
   PixelSums acc;
+  if (!view.radiance) log = nullptr;
   const MarchSetup m = march_setup(view, P, c);
   const PixelFrame& f = m.f;
   const float cd = std::cos(kSectorWidth), sd = std::sin(kSectorWidth);
   for (int s = 0; s < n_slices; ++s) {
     SliceLine L;
-    if (!slice_line(f, n, std::cos(phi[s]), std::sin(phi[s]), c, L)) continue;
+    if (!slice_line(f, n, std::cos(phi[s]), std::sin(phi[s]), c, L)) {
+      if (log) log->counts.push_back(0);
+      continue;
+    }
     const float gamma = std::atan2(L.nx, L.ny);  // angle of n' from ω_o
     // 32 sectors over [γ − π/2, γ + π/2]; sector k's cosine-weighted integral is
     // W[k] = G(b_k) − G(a_k), so AO keeps the definition of eq. 9.
@@ -39,6 +43,7 @@ PixelSums march_bitmask_pixel(const SampleView& view, int i, int j, const Vec3& 
       sb = sn;
     }
     std::uint32_t occluded = 0, occluded_g = 0;
+    const size_t logged = log ? log->entries.size() : 0;
     Vec3 irradiance;
     for (int side = 0; side < 2; ++side) {
       const float sx = side == 0 ? L.dx : -L.dx, sy = side == 0 ? L.dy : -L.dy;
@@ -130,7 +135,9 @@ PixelSums march_bitmask_pixel(const SampleView& view, int i, int j, const Vec3& 
             const int q = std::countr_zero(fresh);
             w += bound[q + 1].ao - bound[q].ao;
           }
-          irradiance += view.radiance[st.k_s] * facing_weight(n_s, st.d3 / std::sqrt(st.dist2)) * w;
+          const float fw = facing_weight(n_s, st.d3 / std::sqrt(st.dist2));
+          irradiance += view.radiance[st.k_s] * fw * w;
+          if (log) log->entries.push_back({std::uint32_t(st.k_s), fw, w});
         }
       }
     }
@@ -141,6 +148,21 @@ PixelSums march_bitmask_pixel(const SampleView& view, int i, int j, const Vec3& 
       acc.bent += L.D * (bound[k + 1].bx - bound[k].bx) + f.wo * (bound[k + 1].by - bound[k].by);
     }
     acc.irradiance += irradiance;
+    if (log) log->counts.push_back(std::uint16_t(log->entries.size() - logged));
+  }
+  return acc;
+}
+
+Vec3 replay_gather(const GatherLog& log, const Vec3* radiance, int n_slices, size_t& entry,
+                   size_t& count) {
+  Vec3 acc;
+  for (int s = 0; s < n_slices; ++s) {
+    Vec3 irradiance;
+    for (int k = log.counts[count++]; k > 0; --k) {
+      const GatherEntry& e = log.entries[entry++];
+      irradiance += radiance[e.src] * e.fw * e.w;
+    }
+    acc += irradiance;
   }
   return acc;
 }

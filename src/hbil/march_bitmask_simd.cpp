@@ -94,7 +94,8 @@ HWY_INLINE VI SectorIndex(DF d, VF v) {
 }  // namespace
 
 void MarchBitmaskRow(const SampleView& view, int i0, int j, int count, const float* phi,
-                     int n_slices, const float* fraction, const HorizonConfig& c, PixelSums* out) {
+                     int n_slices, const float* fraction, const HorizonConfig& c, PixelSums* out,
+                     GatherLog* log) {
   using namespace march;
   const DF d;
   const DI di;
@@ -122,7 +123,20 @@ void MarchBitmaskRow(const SampleView& view, int i0, int j, int count, const flo
   HWY_ALIGN float lane_x[kMaxLanes], lane_y[kMaxLanes];
   HWY_ALIGN float o_ao[kMaxLanes], o_vis[kMaxLanes], o_b[3][kMaxLanes], o_e[3][kMaxLanes];
 
+  if (!view.radiance) log = nullptr;
+  // The gather log, lane by lane until the lanes' pixels are appended in order.
+  std::vector<GatherEntry> lane_entries[kMaxLanes];
+  std::vector<std::uint16_t> lane_counts[kMaxLanes];
+  size_t slice_start[kMaxLanes] = {};
+  auto begin_slice = [&] {
+    for (size_t l = 0; l < N; ++l) slice_start[l] = lane_entries[l].size();
+  };
+  auto end_slice = [&] {
+    for (size_t l = 0; l < N; ++l)
+      lane_counts[l].push_back(std::uint16_t(lane_entries[l].size() - slice_start[l]));
+  };
   for (int base = 0; base < count; base += int(N)) {
+    for (size_t l = 0; l < N; ++l) lane_entries[l].clear(), lane_counts[l].clear();
     // Lanes: texels i0 + base + lane of row j; those past the run read the run's first.
     const VI ii = hn::Add(hn::Set(di, i0 + base), lane);
     const MF in_run = hn::RebindMask(d, hn::Lt(lane, hn::Set(di, count - base)));
@@ -170,7 +184,11 @@ void MarchBitmaskRow(const SampleView& view, int i0, int j, int count, const flo
       const VF gy = hn::Mul(hn::Set(d, c.fy), hn::Sub(D.y, hn::Mul(ray_P.y, D.z)));
       const VF gl = hn::Sqrt(hn::Add(hn::Mul(gx, gx), hn::Mul(gy, gy)));
       const MF live = hn::And(valid, hn::Gt(gl, zero));
-      if (hn::AllFalse(d, live)) continue;
+      if (log) begin_slice();
+      if (hn::AllFalse(d, live)) {
+        if (log) end_slice();
+        continue;
+      }
       const VF dx = hn::Div(gx, gl), dy = hn::Div(gy, gl);
       const V3 dv{hn::Div(dx, hn::Set(d, c.fx)), hn::Div(dy, hn::Set(d, c.fy)), zero};
       const VF nx = Dot(n, D), ny = Dot(n, wo);
@@ -330,6 +348,17 @@ void MarchBitmaskRow(const SampleView& view, int i0, int j, int count, const flo
           const V3 L = Gather3(d, view.radiance, k3);
           const V3 add = Scale(Scale(L, fw), w);
           irradiance = Select(any_fresh, Add3(irradiance, add), irradiance);
+          if (log) {
+            HWY_ALIGN std::int32_t k_lane[kMaxLanes];
+            HWY_ALIGN float fw_lane[kMaxLanes], w_lane[kMaxLanes], fresh_lane[kMaxLanes];
+            hn::Store(k_s, di, k_lane);
+            hn::Store(fw, d, fw_lane);
+            hn::Store(w, d, w_lane);
+            hn::Store(hn::IfThenElseZero(any_fresh, one), d, fresh_lane);
+            for (size_t l = 0; l < N; ++l)
+              if (fresh_lane[l] != 0.f)
+                lane_entries[l].push_back({std::uint32_t(k_lane[l]), fw_lane[l], w_lane[l]});
+          }
         }
       }
       // The unoccluded sectors, in order (march_bitmask.cpp).
@@ -346,6 +375,7 @@ void MarchBitmaskRow(const SampleView& view, int i0, int j, int count, const flo
         acc_b = Select(open, Add3(acc_b, Add3(Scale(D, dbx), Scale(wo, dby))), acc_b);
       }
       acc_e = Select(live, Add3(acc_e, irradiance), acc_e);
+      if (log) end_slice();
     }
     hn::Store(acc_ao, d, o_ao);
     hn::Store(acc_vis, d, o_vis);
@@ -359,6 +389,10 @@ void MarchBitmaskRow(const SampleView& view, int i0, int j, int count, const flo
     hn::Store(hn::IfThenElseZero(valid, one), d, valid_f);
     for (size_t l = 0; l < N && base + int(l) < count; ++l) {
       if (valid_f[l] == 0.f) continue;
+      if (log) {
+        log->entries.insert(log->entries.end(), lane_entries[l].begin(), lane_entries[l].end());
+        log->counts.insert(log->counts.end(), lane_counts[l].begin(), lane_counts[l].end());
+      }
       PixelSums& r = out[base + l];
       r.ao = o_ao[l];
       r.vis = o_vis[l];
@@ -375,9 +409,9 @@ HWY_AFTER_NAMESPACE();
 namespace hbil {
 HWY_EXPORT(MarchBitmaskRow);
 void march_bitmask_row(const SampleView& view, int i0, int j, int count, const float* phi,
-                       int n_slices, const float* fraction, const HorizonConfig& c,
-                       PixelSums* out) {
-  HWY_DYNAMIC_DISPATCH(MarchBitmaskRow)(view, i0, j, count, phi, n_slices, fraction, c, out);
+                       int n_slices, const float* fraction, const HorizonConfig& c, PixelSums* out,
+                       GatherLog* log) {
+  HWY_DYNAMIC_DISPATCH(MarchBitmaskRow)(view, i0, j, count, phi, n_slices, fraction, c, out, log);
 }
 }  // namespace hbil
 #endif
