@@ -20,6 +20,9 @@
 //
 #include <hwy/highway.h>
 
+#include <climits>
+#include <cstdint>
+
 #include "hbil/gbuffer.h"
 #include "hbil/march.h"
 #include "hbil/march_common.h"
@@ -411,6 +414,19 @@ HWY_EXPORT(MarchBitmaskRow);
 void march_bitmask_row(const SampleView& view, int i0, int j, int count, const float* phi,
                        int n_slices, const float* fraction, const HorizonConfig& c, PixelSums* out,
                        GatherLog* log) {
+  // The lanes index the view's floats with 32-bit integers: a view too large for them (more
+  // than about 700 million texels) is marched by the scalar reference instead.
+  const std::int64_t last =
+      std::int64_t(view.height - 1) * view.row + std::int64_t(view.width - 1) * view.col;
+  if (3 * last + 2 > std::int64_t(INT32_MAX)) {
+    for (int k = 0; k < count; ++k) {
+      const std::ptrdiff_t at = view.index(i0 + k, j);
+      if (!(view.position[at].z < ViewGBuffer::kBackground)) continue;
+      out[k] = march_bitmask_pixel(view, i0 + k, j, view.position[at], view.normal[at], phi,
+                                   n_slices, fraction, c, log);
+    }
+    return;
+  }
   HWY_DYNAMIC_DISPATCH(MarchBitmaskRow)(view, i0, j, count, phi, n_slices, fraction, c, out, log);
 }
 }  // namespace hbil
