@@ -9,7 +9,8 @@
 //               gather_steps per side when the irradiance gather runs
 //   Mpixels/s   frame pixels per second
 // Arguments: gather (0: ao and bentcone only, 1: with the irradiance gather), vectorised
-// (1: SIMD march, 0: the scalar reference), steps per side.
+// (1: SIMD march, 0: the scalar reference), steps per side. BM_Frame times the whole
+// single-frame computation instead (default outputs or ao + bentcone).
 #include <benchmark/benchmark.h>
 
 #include <cstdlib>
@@ -65,6 +66,28 @@ void BM_Search(benchmark::State& state) {
       benchmark::Counter(pixels * 1e-6, benchmark::Counter::kIsIterationInvariantRate);
   state.SetLabel(std::to_string(f.g.width) + "x" + std::to_string(f.g.height));
 }
+
+// The whole single-frame computation (compute_ao_frame: view-space G-buffer, search, spatial
+// filter, outputs), what `hbil run -v --set temporal=false` reports as "compute".
+void BM_Frame(benchmark::State& state) {
+  Params p;
+  p.temporal = false;
+  if (state.range(0) == 0) p.outputs = {"ao", "bentcone"};
+  const Frame& f = frame();
+  for (auto _ : state) {
+    AoFrame out = compute_ao_frame(f.g, f.cam, p);
+    benchmark::DoNotOptimize(out.ao.data());
+  }
+  state.counters["Mpixels/s"] = benchmark::Counter(double(f.g.width) * f.g.height * 1e-6,
+                                                   benchmark::Counter::kIsIterationInvariantRate);
+  state.SetLabel(std::to_string(f.g.width) + "x" + std::to_string(f.g.height));
+}
+BENCHMARK(BM_Frame)
+    ->ArgNames({"default_outputs"})
+    ->Args({0})
+    ->Args({1})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 // The default preset (16 steps): AO only and with the gather, SIMD and scalar.
 BENCHMARK(BM_Search)
