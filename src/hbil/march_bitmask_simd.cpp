@@ -11,7 +11,9 @@
 //  - the sample's fields are gathered by index (position, normal, thickness, radiance);
 //  - the sectors a sample newly covers are summed lowest first, one bit per lane per pass,
 //    until no lane has any left (each sector is new at most once per slice);
-//  - the sector weights of the 33 boundaries are a per-lane table in a stack buffer.
+//  - the sector weights of the 33 boundaries are a per-lane table in a stack buffer;
+//  - with a GatherLog, each lane's lit samples are kept per lane and appended pixel by pixel
+//    after the vector, in the scalar march's order.
 // Lanes of background pixels and past the run's end are masked off from the start.
 
 #undef HWY_TARGET_INCLUDE
