@@ -103,13 +103,28 @@ TEST(MarchSimd, MatchesScalarWithMeasuredThicknessAndGather) {
   compare_kernels(v, c, &radiance, 2);
 }
 
-TEST(MarchSimd, MatchesScalarOnBlenderSample) {
+// samples/room_poles frame 3 as the search sees it.
+struct Sample {
+  GBuffer g;
+  Camera cam;
+  ViewGBuffer v;
+};
+Sample room_poles_frame3(const Params& p) {
   const std::string path = std::string(HBIL_SOURCE_DIR) + "/samples/room_poles/frame_0003.exr";
-  const Params p;
   const io::InputFrame in = io::open_frame(path, 3, p);
-  GBuffer g = io::read_fields(in, io::fields_needed(in, p), p);
-  const Camera cam = io::find_camera(in, g, p);
-  const ViewGBuffer v = make_view_gbuffer(g, cam, p);
+  Sample s;
+  s.g = io::read_fields(in, io::fields_needed(in, p), p);
+  s.cam = io::find_camera(in, s.g, p);
+  s.v = make_view_gbuffer(s.g, s.cam, p);
+  return s;
+}
+
+TEST(MarchSimd, MatchesScalarOnBlenderSample) {
+  const Params p;
+  const Sample sample = room_poles_frame3(p);
+  const GBuffer& g = sample.g;
+  const Camera& cam = sample.cam;
+  const ViewGBuffer& v = sample.v;
   ASSERT_FALSE(v.thickness.empty()) << "the sample lost its back-face layer";
   std::vector<Vec3> radiance(g.pixels());
   for (size_t i = 0; i < g.pixels(); ++i)
@@ -121,12 +136,11 @@ TEST(MarchSimd, MatchesScalarOnBlenderSample) {
 // A later bounce summed from the first one's recorded gather equals a new search with its
 // radiance, to the bit, with both marches.
 TEST(GatherRecord, ReplayEqualsANewSearch) {
-  const std::string path = std::string(HBIL_SOURCE_DIR) + "/samples/room_poles/frame_0003.exr";
   const Params p;
-  const io::InputFrame in = io::open_frame(path, 3, p);
-  GBuffer g = io::read_fields(in, io::fields_needed(in, p), p);
-  const Camera cam = io::find_camera(in, g, p);
-  const ViewGBuffer v = make_view_gbuffer(g, cam, p);
+  const Sample sample = room_poles_frame3(p);
+  const GBuffer& g = sample.g;
+  const Camera& cam = sample.cam;
+  const ViewGBuffer& v = sample.v;
   std::vector<Vec3> first(g.pixels()), second(g.pixels());
   for (size_t i = 0; i < g.pixels(); ++i) {
     first[i] = g.diffdir[i];
