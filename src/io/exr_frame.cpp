@@ -143,8 +143,7 @@ std::vector<std::string> fields_needed(const InputFrame& f, const Params& reques
                                           join(f.wanted.at("normal")) +
                                           "; map it with passes.normal)");
     if (f.has("depth")) need.push_back("depth");
-    if (f.has("position") && (!f.has("depth") || (!fs::exists(sidecar_path_for(f.path)) &&
-                                                  !camera_from_exr_attributes(f.spec))))
+    if (f.has("position") && (!f.has("depth") || camera_from_position(f)))
       need.push_back("position");  // the geometry, or the camera solved from it (find_camera)
     if (!f.has("depth") && !f.has("position"))
       throw Error(Exit::missing_pass, f.where() + ": missing pass: depth or position (looked for " +
@@ -288,6 +287,11 @@ GBuffer read_fields(const InputFrame& f, const std::vector<std::string>& fields,
     }
   }
   return g;
+}
+
+bool camera_from_position(const InputFrame& f) {
+  return f.has("position") && !fs::exists(sidecar_path_for(f.path)) &&
+         !camera_from_exr_attributes(f.spec);
 }
 
 Camera find_camera(const InputFrame& f, GBuffer& g, const Params& p, double max_rms_px) {

@@ -57,6 +57,10 @@ Params resolve_outputs(const InputFrame& f, const Params& p, std::string* why_dr
 // frame, file, channel, pixel and value. Background (depth >= background_depth) is allowed.
 GBuffer read_fields(const InputFrame& f, const std::vector<std::string>& fields, const Params& p);
 
+// Whether find_camera will solve the camera from Position: no sidecar beside the file, no
+// camera attributes in its header, and a Position pass (fields_needed then reads it).
+bool camera_from_position(const InputFrame& f);
+
 // The camera of a frame, in the order: sidecar next to the file, EXR worldToCamera and
 // worldToNDC attributes, solved from the Position pass (read here when `g` lacks it). A
 // solved camera whose RMS reprojection error exceeds max_rms_px is Error(Exit::camera);
