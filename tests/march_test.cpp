@@ -8,8 +8,10 @@
 #include "hbil/march.h"
 
 #include <gtest/gtest.h>
+#include <hwy/targets.h>
 
 #include <cstring>
+#include <iostream>
 #include <numbers>
 
 #include "analytic_scenes.h"
@@ -131,6 +133,27 @@ TEST(MarchSimd, MatchesScalarOnBlenderSample) {
     radiance[i] = Vec3{g.diffcol[i].x * g.diffdir[i].x, g.diffcol[i].y * g.diffdir[i].y,
                        g.diffcol[i].z * g.diffdir[i].z};
   compare_kernels(v, make_horizon_config(p, cam), &radiance, 2);
+}
+
+// Every instruction set the machine has gives the same bits (so do frames computed on farm
+// nodes with different processors).
+TEST(MarchSimd, EveryInstructionSetGivesTheSameBits) {
+  const Params p;
+  const Sample sample = room_poles_frame3(p);
+  std::vector<Vec3> radiance(sample.g.pixels());
+  for (size_t i = 0; i < radiance.size(); ++i) radiance[i] = sample.g.diffdir[i];
+  const std::vector<std::int64_t> targets = hwy::SupportedAndGeneratedTargets();
+  ASSERT_FALSE(targets.empty());
+  std::cout << "instruction sets:";
+  for (std::int64_t t : targets) {
+    SCOPED_TRACE(hwy::TargetName(t));
+    std::cout << " " << hwy::TargetName(t);
+    hwy::SetSupportedTargetsForTest(t);
+    EXPECT_STREQ(march_simd_target(), hwy::TargetName(t));
+    compare_kernels(sample.v, make_horizon_config(p, sample.cam), &radiance, 2);
+  }
+  std::cout << "\n";
+  hwy::SetSupportedTargetsForTest(0);
 }
 
 // A later bounce summed from the first one's recorded gather equals a new search with its

@@ -15,6 +15,7 @@
 #include "cli/commands.h"
 #include "hbil/ao_frame.h"
 #include "hbil/error.h"
+#include "hbil/march.h"
 #include "hbil/temporal.h"
 #include "io/display.h"
 #include "io/environment.h"
@@ -170,6 +171,10 @@ void run(const RunOptions& o) {
                   ? " (no back-face channel " + p.passes.at("backdepth").dump() + ")"
                   : std::string(" (passes.backdepth is off)"));
       std::cerr << s.str() << "\n";
+      std::cerr << "hbil: march: "
+                << (p.vectorised ? std::string("SIMD, ") + march_simd_target()
+                                 : std::string("scalar reference"))
+                << "\n";
     }
   }
   // Far field: the environment is projected to SH once for the whole run.

@@ -52,6 +52,11 @@ void march_bitmask_row(const SampleView& view, int i0, int j, int count, const f
                        int n_slices, const float* fraction, const HorizonConfig& c, PixelSums* out,
                        GatherLog* log = nullptr);
 
+// The instruction set march_bitmask_row runs with on this machine ("AVX3" = AVX-512,
+// "AVX2", "SSE4", ...): the best one the processor supports, chosen at run time. Every one
+// gives the same results to the bit.
+const char* march_simd_target();
+
 // The irradiance sum of one logged pixel with source radiance `radiance` (indexed like the
 // view the log was made on); `entry` and `count` advance past it.
 Vec3 replay_gather(const GatherLog& log, const Vec3* radiance, int n_slices, size_t& entry,

@@ -413,6 +413,11 @@ HWY_AFTER_NAMESPACE();
 #if HWY_ONCE
 namespace hbil {
 HWY_EXPORT(MarchBitmaskRow);
+
+const char* march_simd_target() {
+  const std::vector<std::int64_t> targets = hwy::SupportedAndGeneratedTargets();
+  return targets.empty() ? "none" : hwy::TargetName(targets.front());
+}
 void march_bitmask_row(const SampleView& view, int i0, int j, int count, const float* phi,
                        int n_slices, const float* fraction, const HorizonConfig& c, PixelSums* out,
                        GatherLog* log) {
