@@ -193,9 +193,7 @@ HorizonImage horizon_interleaved(const ViewGBuffer& g, const HorizonConfig& c, i
       const Vec3& P = copy_subbuffers ? s.pos[size_t(j) * s.w + i] : g.position[dst];
       const Vec3& n = copy_subbuffers ? s.nrm[size_t(j) * s.w + i] : g.normal[dst];
       store(out, dst,
-            c.bitmask ? march_bitmask_pixel(s.view, i, j, P, n, s.phi.data(), slices,
-                                            s.fraction.data(), c, log)
-                      : march_pixel(s.view, i, j, P, n, s.phi.data(), slices, s.fraction.data(), c),
+            march_pixel(s.view, i, j, P, n, s.phi.data(), slices, s.fraction.data(), c, log),
             slices);
     }
   });

@@ -33,10 +33,11 @@ struct GatherLog {
 // Marches the slices at rotations phi[0..n) about ω_o (radians; φ = 0 is the slice holding
 // the view-space x axis) for the pixel at texel (i, j) of `view`, with view-space position
 // P and unit normal n. `fraction` holds the sample positions from step_fractions().
-// Scalar; dispatches on c.bitmask.
+// Scalar; dispatches on c.bitmask. `log`: see march_bitmask_pixel (the horizon method
+// logs nothing).
 PixelSums march_pixel(const SampleView& view, int i, int j, const Vec3& P, const Vec3& n,
-                      const float* phi, int n_slices, const float* fraction,
-                      const HorizonConfig& c);
+                      const float* phi, int n_slices, const float* fraction, const HorizonConfig& c,
+                      GatherLog* log = nullptr);
 PixelSums march_horizon_pixel(const SampleView& view, int i, int j, const Vec3& P, const Vec3& n,
                               const float* phi, int n_slices, const float* fraction,
                               const HorizonConfig& c);

@@ -66,9 +66,9 @@ PixelSums march_horizon_pixel(const SampleView& view, int i, int j, const Vec3& 
 }
 
 PixelSums march_pixel(const SampleView& view, int i, int j, const Vec3& P, const Vec3& n,
-                      const float* phi, int n_slices, const float* fraction,
-                      const HorizonConfig& c) {
-  return c.bitmask ? march_bitmask_pixel(view, i, j, P, n, phi, n_slices, fraction, c)
+                      const float* phi, int n_slices, const float* fraction, const HorizonConfig& c,
+                      GatherLog* log) {
+  return c.bitmask ? march_bitmask_pixel(view, i, j, P, n, phi, n_slices, fraction, c, log)
                    : march_horizon_pixel(view, i, j, P, n, phi, n_slices, fraction, c);
 }
 
