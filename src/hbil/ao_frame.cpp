@@ -9,6 +9,7 @@
 #include "hbil/error.h"
 #include "hbil/interleave.h"
 #include "hbil/multibounce.h"
+#include "hbil/reduced.h"
 #include "hbil/spatial_filter.h"
 
 namespace hbil {
@@ -67,11 +68,19 @@ HorizonImage search_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& 
   // marching again (interleaved bitmask search; identical results).
   GatherRecord record;
   GatherRecord* reuse = gather && p.bounces > 1 ? &record : nullptr;
+  // A reduced search (search_scale > 1) marches every f-th pixel of every f-th row and its
+  // result is upsampled to v (reduced.h).
+  const int f = p.search_scale;
+  const float tol = float(p.depth_tolerance);
+  const ViewGBuffer lo = f > 1 ? reduce_view(v, f) : ViewGBuffer{};
+  const ViewGBuffer& sv = f > 1 ? lo : v;
   auto search = [&](const std::vector<Vec3>* radiance) {
-    HorizonImage h = p.interleave ? horizon_interleaved(v, c, p.slices, radiance, true, reuse)
-                                  : horizon_full(v, c, p.slices, radiance);
-    if (p.interleave && p.spatial_filter) h = spatial_filter(v, h, float(p.depth_tolerance));
-    return h;
+    std::vector<Vec3> reduced;
+    if (f > 1 && radiance) radiance = &(reduced = reduce_radiance(v, lo, f, *radiance, tol));
+    HorizonImage h = p.interleave ? horizon_interleaved(sv, c, p.slices, radiance, true, reuse)
+                                  : horizon_full(sv, c, p.slices, radiance);
+    if (p.interleave && p.spatial_filter) h = spatial_filter(sv, h, tol);
+    return f > 1 ? upsample_horizon(v, lo, f, h, tol) : h;
   };
   // Bounce k gathers the outgoing radiance of bounce k − 1 (bounce 0: direct light and
   // emission, plus the previous frame's indirect light when the temporal chain feeds it

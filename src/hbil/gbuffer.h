@@ -45,6 +45,9 @@ struct ViewGBuffer {
   // Occluder thickness along each pixel's view ray, world units, from the back-face depth:
   // empty without one; negative where it says nothing (the constant thickness applies).
   std::vector<float> thickness;
+  // Full-resolution pixels per pixel of this buffer along x and y: 1, or f for a buffer made by
+  // reduce_view (reduced.h) from every f-th pixel of every f-th row.
+  int scale = 1;
 
   size_t pixels() const { return size_t(width) * size_t(height); }
   bool is_background(size_t i) const { return !(position[i].z < kBackground); }

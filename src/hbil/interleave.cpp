@@ -63,7 +63,7 @@ HorizonImage horizon_full(const ViewGBuffer& g, const HorizonConfig& c, int slic
                         g.height,
                         1,
                         g.width,
-                        1,
+                        g.scale,
                         radiance ? radiance->data() : nullptr,
                         g.thickness.empty() ? nullptr : g.thickness.data()};
   const bool simd = c.bitmask && c.vectorised;
@@ -139,7 +139,7 @@ HorizonImage horizon_interleaved(const ViewGBuffer& g, const HorizonConfig& c, i
                           s.h,
                           1,
                           s.w,
-                          4,
+                          4 * g.scale,
                           radiance ? s.rad.data() : nullptr,
                           s.thick.empty() ? nullptr : s.thick.data()};
     } else {
@@ -150,7 +150,7 @@ HorizonImage horizon_interleaved(const ViewGBuffer& g, const HorizonConfig& c, i
                           s.h,
                           4,
                           std::ptrdiff_t(4) * g.width,
-                          4,
+                          4 * g.scale,
                           radiance ? radiance->data() + first : nullptr,
                           g.thickness.empty() ? nullptr : g.thickness.data() + first};
     }

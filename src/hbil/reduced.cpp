@@ -1,0 +1,129 @@
+// reduced.cpp: see reduced.h.
+#include "hbil/reduced.h"
+
+#include <tbb/parallel_for.h>
+
+#include <cmath>
+#include <limits>
+
+namespace hbil {
+
+namespace {
+
+// The spatial filter's same-surface test (spatial_filter.h), here between a pixel (P, n) and
+// a texel's point Q and normal m.
+constexpr float kNormalCos = 0.8f;
+bool same_surface(const Vec3& P, const Vec3& n, const Vec3& Q, const Vec3& m, float tol) {
+  return std::fabs(dot(Q - P, n)) <= tol && dot(m, n) >= kNormalCos;
+}
+
+}  // namespace
+
+ViewGBuffer reduce_view(const ViewGBuffer& v, int f) {
+  ViewGBuffer lo;
+  lo.width = (v.width + f - 1) / f;
+  lo.height = (v.height + f - 1) / f;
+  lo.scale = v.scale * f;
+  lo.position.resize(lo.pixels());
+  lo.normal.resize(lo.pixels());
+  if (!v.thickness.empty()) lo.thickness.resize(lo.pixels());
+  tbb::parallel_for(0, lo.height, [&](int j) {
+    for (int i = 0; i < lo.width; ++i) {
+      const size_t k = size_t(j) * lo.width + i, src = size_t(f * j) * v.width + f * i;
+      lo.position[k] = v.position[src];
+      lo.normal[k] = v.normal[src];
+      if (!lo.thickness.empty()) lo.thickness[k] = v.thickness[src];
+    }
+  });
+  return lo;
+}
+
+std::vector<Vec3> reduce_radiance(const ViewGBuffer& v, const ViewGBuffer& lo, int f,
+                                  const std::vector<Vec3>& L, float depth_tolerance) {
+  std::vector<Vec3> out(lo.pixels());
+  tbb::parallel_for(0, lo.height, [&](int j) {
+    for (int i = 0; i < lo.width; ++i) {
+      const size_t k = size_t(j) * lo.width + i;
+      if (lo.is_background(k)) continue;
+      const Vec3 &P = lo.position[k], &n = lo.normal[k];
+      const float tol = depth_tolerance * P.z;
+      Vec3 sum;
+      float w = 0;
+      for (int y = f * j; y < std::min(f * j + f, v.height); ++y)
+        for (int x = f * i; x < std::min(f * i + f, v.width); ++x) {
+          const size_t p = size_t(y) * v.width + x;
+          if (v.is_background(p) || !same_surface(P, n, v.position[p], v.normal[p], tol)) continue;
+          sum += L[p];
+          w += 1.f;
+        }
+      out[k] = sum / w;  // w >= 1: the texel's own pixel passes its own test
+    }
+  });
+  return out;
+}
+
+HorizonImage upsample_horizon(const ViewGBuffer& v, const ViewGBuffer& lo, int f,
+                              const HorizonImage& h, float depth_tolerance) {
+  HorizonImage out;
+  out.width = v.width;
+  out.height = v.height;
+  out.ao.assign(v.pixels(), 1.f);
+  out.vis.assign(v.pixels(), 1.f);
+  out.bent.assign(v.pixels(), Vec3{});
+  const bool gather = !h.irradiance.empty();
+  if (gather) out.irradiance.assign(v.pixels(), Vec3{});
+  const float inv_f = 1.f / float(f);
+  tbb::parallel_for(0, v.height, [&](int y) {
+    const int j0 = y / f;
+    const float ty = float(y - f * j0) * inv_f;
+    for (int x = 0; x < v.width; ++x) {
+      const size_t p = size_t(y) * v.width + x;
+      if (v.is_background(p)) continue;
+      const Vec3 &P = v.position[p], &n = v.normal[p];
+      const float tol = depth_tolerance * P.z;
+      const int i0 = x / f;
+      const float tx = float(x - f * i0) * inv_f;
+      float ao = 0, vis = 0, w = 0;
+      Vec3 bent, irr;
+      auto take = [&](size_t k, float wk) {
+        ao += wk * h.ao[k];
+        vis += wk * h.vis[k];
+        bent += h.bent[k] * wk;
+        if (gather) irr += h.irradiance[k] * wk;
+        w += wk;
+      };
+      for (int dj = 0; dj < 2; ++dj)
+        for (int di = 0; di < 2; ++di) {
+          const int i = i0 + di, j = j0 + dj;
+          const float wk = (di ? tx : 1.f - tx) * (dj ? ty : 1.f - ty);
+          if (!(wk > 0.f) || i >= lo.width || j >= lo.height) continue;
+          const size_t k = size_t(j) * lo.width + i;
+          if (lo.is_background(k) || !same_surface(P, n, lo.position[k], lo.normal[k], tol))
+            continue;
+          take(k, wk);
+        }
+      if (!(w > 0.f)) {
+        // No texel on this pixel's surface: the nearest to its tangent plane that faces its
+        // way, among the 4x4 texels around it.
+        float best = std::numeric_limits<float>::infinity();
+        size_t at = 0;
+        for (int j = std::max(j0 - 1, 0); j <= std::min(j0 + 2, lo.height - 1); ++j)
+          for (int i = std::max(i0 - 1, 0); i <= std::min(i0 + 2, lo.width - 1); ++i) {
+            const size_t k = size_t(j) * lo.width + i;
+            if (lo.is_background(k) || dot(lo.normal[k], n) <= 0.f) continue;
+            const float dist = std::fabs(dot(lo.position[k] - P, n));
+            if (dist < best) best = dist, at = k;
+          }
+        if (best == std::numeric_limits<float>::infinity()) continue;
+        take(at, 1.f);
+      }
+      out.ao[p] = ao / w;
+      out.vis[p] = vis / w;
+      out.bent[p] = bent / w;
+      if (gather) out.irradiance[p] = irr / w;
+    }
+  });
+  return out;
+}
+
+}  // namespace hbil

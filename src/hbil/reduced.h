@@ -1,0 +1,40 @@
+// reduced.h: the horizon search at a reduced resolution, and the depth- and normal-aware
+// upsample of its result (Params::search_scale).
+//
+// Occlusion and indirect light vary slowly across a surface: at 1920x1080 the default AO
+// radius spans hundreds of pixels and its 16 steps per side lie tens of pixels apart, so a
+// search on every f-th pixel of every f-th row sees nearly the same occluders as one on
+// every pixel, for 1/f² of the cost. Texel (i, j) of the reduced buffer is the full-resolution
+// pixel (f i, f j) itself (position, normal and thickness unchanged, not averaged), so the
+// reduced grid is the full one with a spacing of f pixels and the march's ray geometry stays
+// exact (ViewGBuffer::scale). The source radiance of a texel is the mean over its f x f block
+// of the pixels on the texel's own surface (its 1-spp noise averaged, never light from another
+// surface).
+//
+// Upsample (a joint bilateral upsample, Kopf et al. 2007): each full-resolution pixel takes
+// the bilinear weights of the 2x2 texels around its position, kept only for texels on its own
+// surface (the spatial filter's test: within depth_tolerance x z of its tangent plane, normal
+// within 37 degrees). A pixel with none of them (a surface narrower than f pixels, such as a
+// pole seen from afar) takes the texel of the 4x4 around it that lies nearest its tangent
+// plane among those facing its way, else the unoccluded default.
+#pragma once
+
+#include <vector>
+
+#include "hbil/gbuffer.h"
+#include "hbil/interleave.h"
+
+namespace hbil {
+
+// Every f-th pixel of every f-th row of v (f >= 1), with scale = v.scale * f.
+ViewGBuffer reduce_view(const ViewGBuffer& v, int f);
+// The source radiance of each texel of `lo` (from reduce_view(v, f)): the mean of L over the
+// pixels of its f x f block of v on the texel's surface.
+std::vector<Vec3> reduce_radiance(const ViewGBuffer& v, const ViewGBuffer& lo, int f,
+                                  const std::vector<Vec3>& L, float depth_tolerance);
+// The search result `h` on `lo` brought to v's resolution (background pixels keep the
+// unoccluded default: ao = vis = 1, bent = 0, irradiance = 0).
+HorizonImage upsample_horizon(const ViewGBuffer& v, const ViewGBuffer& lo, int f,
+                              const HorizonImage& h, float depth_tolerance);
+
+}  // namespace hbil
