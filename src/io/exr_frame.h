@@ -28,6 +28,7 @@ struct InputFrame {
   std::string path;
   int frame = 0;
   OIIO::ImageSpec spec;
+  bool openexr = false;    // an OpenEXR file (read through OpenEXR itself)
   std::string view_layer;  // "" when channels have no layer
   std::map<std::string, std::vector<int>>
       channels;  // field -> channel indices (present fields only)

@@ -5,7 +5,9 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cstring>
 #include <filesystem>
+#include <Imath/half.h>
 #include <nlohmann/json.hpp>
 
 #include "hbil/error.h"
@@ -15,47 +17,59 @@ namespace hbil::io {
 
 namespace fs = std::filesystem;
 
-std::vector<std::string> output_channels(const AoFrame& f, const Params& p) {
-  std::vector<std::string> ch;
+std::vector<OutputChannel> output_plan(const AoFrame& f, const Params& p) {
+  std::vector<OutputChannel> plan;
+  // Colour layers as half where the preset says so; data layers (ao, bentcone, history)
+  // always 32-bit.
+  auto add = [&](const std::string& name, const float* src, size_t stride, bool colour) {
+    plan.push_back({name, src, stride, colour && p.colour_half});
+  };
+  auto rgb = [&](const std::string& layer, const std::vector<Vec3>& v) {
+    for (int k = 0; k < 3; ++k) add(layer + "." + "RGB"[k], &v.data()->x + k, 3, true);
+  };
   for (const auto& o : p.outputs) {
-    if (o == "ao" && f.ao_rgb.empty()) ch.push_back("ao.Y");
-    if (o == "ao" && !f.ao_rgb.empty()) ch.insert(ch.end(), {"ao.R", "ao.G", "ao.B"});
-    if (o == "farfield") ch.insert(ch.end(), {"farfield.R", "farfield.G", "farfield.B"});
+    if (o == "ao" && f.ao_rgb.empty()) add("ao.Y", f.ao.data(), 1, false);
+    if (o == "ao" && !f.ao_rgb.empty())
+      for (int k = 0; k < 3; ++k) add(std::string("ao.") + "RGB"[k], &f.ao_rgb.data()->x + k, 3, false);
+    if (o == "farfield") rgb("farfield", f.farfield);
     if (o == "composite")
-      ch.insert(ch.end(), {"composite.R", "composite.G", "composite.B", "composite.A"});
-    if (o == "bentcone")
-      ch.insert(ch.end(), {"bentcone.X", "bentcone.Y", "bentcone.Z", "bentcone.W"});
-    if (o == "irradiance") ch.insert(ch.end(), {"irradiance.R", "irradiance.G", "irradiance.B"});
-    if (o == "indirect") ch.insert(ch.end(), {"indirect.R", "indirect.G", "indirect.B"});
-    if (o == "history") ch.push_back("history.Y");
+      for (int k = 0; k < 4; ++k)
+        add(std::string("composite.") + "RGBA"[k], f.composite.data() + k, 4, true);
+    if (o == "bentcone") {
+      for (int k = 0; k < 3; ++k) add(std::string("bentcone.") + "XYZ"[k], &f.bent.data()->x + k, 3, false);
+      add("bentcone.W", f.cone_cos.data(), 1, false);
+    }
+    if (o == "irradiance") rgb("irradiance", f.irradiance);
+    if (o == "indirect") rgb("indirect", f.indirect);
+    // Without a temporal chain every pixel has one frame of history.
+    if (o == "history") add("history.Y", f.history.empty() ? nullptr : f.history.data(), 1, false);
   }
-  return ch;
+  return plan;
 }
 
-void output_rows(const AoFrame& f, const Params& p, int y0, int y1, float* px) {
-  for (size_t i = size_t(y0) * f.width; i < size_t(y1) * f.width; ++i)
-    for (const auto& o : p.outputs) {
-      if (o == "ao" && f.ao_rgb.empty()) *px++ = f.ao[i];
-      if (o == "history") *px++ = f.history.empty() ? 1.f : f.history[i];
-      if (o == "ao" && !f.ao_rgb.empty())
-        *px++ = f.ao_rgb[i].x, *px++ = f.ao_rgb[i].y, *px++ = f.ao_rgb[i].z;
-      if (o == "composite")
-        for (int k = 0; k < 4; ++k) *px++ = f.composite[4 * i + k];
-      if (o == "bentcone") {
-        *px++ = f.bent[i].x;
-        *px++ = f.bent[i].y;
-        *px++ = f.bent[i].z;
-        *px++ = f.cone_cos[i];
+size_t pixel_bytes(const std::vector<OutputChannel>& plan) {
+  size_t n = 0;
+  for (const OutputChannel& c : plan) n += c.half ? 2 : 4;
+  return n;
+}
+
+void output_rows(const std::vector<OutputChannel>& plan, int width, int y0, int y1,
+                 unsigned char* dst) {
+  const size_t stride = pixel_bytes(plan), first = size_t(y0) * width, n = size_t(y1 - y0) * width;
+  size_t offset = 0;
+  for (const OutputChannel& c : plan) {
+    unsigned char* out = dst + offset;
+    for (size_t i = 0; i < n; ++i, out += stride) {
+      const float v = c.src ? c.src[(first + i) * c.stride] : 1.f;
+      if (c.half) {
+        const Imath::half h(v);
+        std::memcpy(out, &h, 2);
+      } else {
+        std::memcpy(out, &v, 4);
       }
-      for (const auto* rgb :
-           {o == "irradiance" ? &f.irradiance : nullptr, o == "indirect" ? &f.indirect : nullptr,
-            o == "farfield" ? &f.farfield : nullptr})
-        if (rgb) {
-          *px++ = (*rgb)[i].x;
-          *px++ = (*rgb)[i].y;
-          *px++ = (*rgb)[i].z;
-        }
     }
+    offset += c.half ? 2 : 4;
+  }
 }
 
 std::string camera_json(const Camera& c) {
@@ -98,22 +112,16 @@ std::string write_temporary(const std::string& final_path, const AoFrame& f,
                             const Camera& cam) {
   const fs::path tmp = prepare_temporary(final_path);
   std::error_code ec;
-  const std::vector<std::string> channels = output_channels(f, p);
-  OIIO::ImageSpec spec(f.width, f.height, int(channels.size()), OIIO::TypeDesc::FLOAT);
-  spec.channelnames = channels;
-  // Colour layers as half where the preset says so; data layers (ao, bentcone, history)
-  // always 32-bit.
-  if (p.colour_half) {
-    bool any_half = false;
-    for (const std::string& ch : channels) {
-      const std::string layer = ch.substr(0, ch.find('.'));
-      const bool colour = layer == "irradiance" || layer == "indirect" || layer == "farfield" ||
-                          layer == "composite";
-      spec.channelformats.push_back(colour ? OIIO::TypeDesc::HALF : OIIO::TypeDesc::FLOAT);
-      any_half |= colour;
-    }
-    if (!any_half) spec.channelformats.clear();
+  const std::vector<OutputChannel> plan = output_plan(f, p);
+  OIIO::ImageSpec spec(f.width, f.height, int(plan.size()), OIIO::TypeDesc::FLOAT);
+  spec.channelnames.clear();
+  bool any_half = false;
+  for (const OutputChannel& c : plan) {
+    spec.channelnames.push_back(c.name);
+    spec.channelformats.push_back(c.half ? OIIO::TypeDesc::HALF : OIIO::TypeDesc::FLOAT);
+    any_half |= c.half;
   }
+  if (!any_half) spec.channelformats.clear();
   spec.alpha_channel = -1;
   spec.z_channel = -1;
   // The input's metadata first (stamp, cycles.*, ...), minus what describes its storage.
@@ -136,12 +144,14 @@ std::string write_temporary(const std::string& final_path, const AoFrame& f,
     throw Error(Exit::output, final_path + ": cannot create an EXR writer: " + OIIO::geterror());
   // Written in strips of rows, so that no second copy of the whole frame is made.
   constexpr int kStrip = 64;
-  std::vector<float> strip(size_t(kStrip) * f.width * channels.size());
+  // Each strip is packed in the file's own channel formats (native data: no conversion in
+  // OpenImageIO).
+  std::vector<unsigned char> strip(size_t(kStrip) * f.width * pixel_bytes(plan));
   bool ok = out->open(tmp.string(), spec);
   for (int y0 = 0; ok && y0 < f.height; y0 += kStrip) {
     const int y1 = std::min(y0 + kStrip, f.height);
-    output_rows(f, p, y0, y1, strip.data());
-    ok = out->write_scanlines(y0, y1, 0, OIIO::TypeDesc::FLOAT, strip.data());
+    output_rows(plan, f.width, y0, y1, strip.data());
+    ok = out->write_scanlines(y0, y1, 0, OIIO::TypeUnknown, strip.data());
   }
   if (!ok || !out->close()) {
     const std::string why = out->geterror();

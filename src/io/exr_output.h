@@ -24,10 +24,21 @@
 
 namespace hbil::io {
 
+// One channel of an output file: its name, where its values are (channel of pixel i at
+// src[i * stride]; null: the constant 1) and whether it is stored as half.
+struct OutputChannel {
+  std::string name;
+  const float* src;
+  size_t stride;
+  bool half;
+};
 // The channels of the requested layers, in the order of Params::outputs.
-std::vector<std::string> output_channels(const AoFrame& f, const Params& p);
-// Rows [y0, y1) of the output, interleaved in output_channels' order, into dst.
-void output_rows(const AoFrame& f, const Params& p, int y0, int y1, float* dst);
+std::vector<OutputChannel> output_plan(const AoFrame& f, const Params& p);
+// Bytes of one pixel of the plan (4 per float channel, 2 per half).
+size_t pixel_bytes(const std::vector<OutputChannel>& plan);
+// Rows [y0, y1) of the output, each pixel's channels packed in the plan's order and formats.
+void output_rows(const std::vector<OutputChannel>& plan, int width, int y0, int y1,
+                 unsigned char* dst);
 
 // The camera as the JSON stored in hbil:camera.
 std::string camera_json(const Camera& c);
