@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstring>
 #include <cmath>
 #include <filesystem>
 #include <limits>
@@ -404,6 +405,46 @@ TEST_F(ExrFrame, CameraSolvedFromPositionWithoutSidecar) {
   EXPECT_NEAR(c.x, rc.x, 0.01);
   EXPECT_NEAR(c.y, rc.y, 0.01);
   EXPECT_NEAR(c.z, rc.z, 0.01);
+}
+
+// Writes `src` again with tiles of `tile` x `tile` pixels, every channel in its own format.
+void write_tiled(const std::string& src, const std::string& dst, int tile) {
+  auto in = OIIO::ImageInput::open(src);
+  ASSERT_TRUE(in) << OIIO::geterror();
+  OIIO::ImageSpec spec = in->spec();
+  std::vector<unsigned char> native(spec.image_bytes(true));
+  ASSERT_TRUE(in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeUnknown, native.data()));
+  spec.tile_width = spec.tile_height = tile;
+  spec.tile_depth = 1;
+  auto out = OIIO::ImageOutput::create(dst);
+  ASSERT_TRUE(out && out->open(dst, spec)) << OIIO::geterror();
+  ASSERT_TRUE(out->write_image(OIIO::TypeUnknown, native.data())) << out->geterror();
+  ASSERT_TRUE(out->close());
+}
+
+TEST(ExrLayouts, TiledFileGivesTheScanlineTwinsPixels) {
+  TempDir dir{test::test_name()};
+  const std::string src = test::kRoomPoles + "/frame_0001.exr";
+  for (int tile : {32, 64, 7}) {  // 7: partial tiles at every edge of the 256x144 frame
+    const std::string tiled = dir / ("tiled" + std::to_string(tile) + ".exr");
+    write_tiled(src, tiled, tile);
+    Params p;
+    const InputFrame a = open_frame(src, 1, p), b = open_frame(tiled, 1, p);
+    ASSERT_GT(b.spec.tile_width, 0);
+    const std::vector<std::string> need = fields_needed(a, p);
+    const GBuffer ga = read_fields(a, need, p), gb = read_fields(b, need, p);
+    ASSERT_EQ(ga.pixels(), gb.pixels());
+    EXPECT_EQ(ga.depth, gb.depth);
+    EXPECT_EQ(ga.backdepth, gb.backdepth);
+    EXPECT_EQ(ga.alpha, gb.alpha);
+    EXPECT_EQ(ga.motion, gb.motion);
+    ASSERT_EQ(ga.normal.size(), gb.normal.size());
+    EXPECT_EQ(0, std::memcmp(ga.normal.data(), gb.normal.data(), ga.normal.size() * sizeof(Vec3)));
+    ASSERT_EQ(ga.diffcol.size(), gb.diffcol.size());
+    EXPECT_EQ(0,
+              std::memcmp(ga.diffcol.data(), gb.diffcol.data(), ga.diffcol.size() * sizeof(Vec3)));
+    EXPECT_FALSE(ga.diffcol.empty());
+  }
 }
 
 }  // namespace

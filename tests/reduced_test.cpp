@@ -1,0 +1,162 @@
+// reduced_test.cpp: the reduced-resolution search (reduced.h, Params::search_scale): the
+// reduced buffer is the full one on a coarser grid, the upsample never mixes surfaces, the
+// radiance block mean stays on the texel's surface, and a reduced search keeps the closed
+// forms of the V-groove.
+#include <gtest/gtest.h>
+#include <tbb/task_arena.h>
+
+#include <cmath>
+#include <cstring>
+#include <numbers>
+
+#include "analytic_scenes.h"
+#include "hbil/ao_frame.h"
+#include "hbil/reduced.h"
+
+namespace hbil {
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+
+// Two fronto-parallel planes, x < split at depth 2 and the rest at depth 5; normals +z
+// towards the camera (view space: z forward, so the normal is (0, 0, -1)).
+ViewGBuffer two_planes(int w, int h, int split) {
+  ViewGBuffer v;
+  v.width = w;
+  v.height = h;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const float z = x < split ? 2.f : 5.f;
+      v.position.push_back(Vec3{(x - w / 2.f) * z / 100.f, (y - h / 2.f) * z / 100.f, z});
+      v.normal.push_back(Vec3{0, 0, -1});
+    }
+  return v;
+}
+
+TEST(ReducedSearch, TexelIsThePixelOnACoarserGrid) {
+  const ViewGBuffer v = two_planes(13, 7, 5);
+  const ViewGBuffer lo = reduce_view(v, 2);
+  EXPECT_EQ(lo.width, 7);  // ceil(13 / 2)
+  EXPECT_EQ(lo.height, 4);
+  EXPECT_EQ(lo.scale, 2);
+  for (int j = 0; j < lo.height; ++j)
+    for (int i = 0; i < lo.width; ++i) {
+      const size_t k = size_t(j) * lo.width + i, p = size_t(2 * j) * v.width + 2 * i;
+      EXPECT_EQ(0, std::memcmp(&lo.position[k], &v.position[p], sizeof(Vec3)));
+      EXPECT_EQ(0, std::memcmp(&lo.normal[k], &v.normal[p], sizeof(Vec3)));
+    }
+  EXPECT_EQ(reduce_view(lo, 3).scale, 6);
+}
+
+TEST(ReducedSearch, RadianceBlockMeanStaysOnItsSurface) {
+  // Texel 2 of the row covers pixels 4 and 5 (x = 4 on the near plane, x = 5 on the far one).
+  const ViewGBuffer v = two_planes(8, 2, 5);
+  std::vector<Vec3> L(v.pixels());
+  for (size_t i = 0; i < L.size(); ++i) L[i] = Vec3{float(i % 8), 1, 0};
+  const ViewGBuffer lo = reduce_view(v, 2);
+  const std::vector<Vec3> r = reduce_radiance(v, lo, 2, L, 0.05f);
+  EXPECT_FLOAT_EQ(r[0].x, 0.5f);  // pixels 0, 1 (both rows): mean 0.5
+  EXPECT_FLOAT_EQ(r[2].x, 4.f);   // only pixel 4 is on the texel's plane
+  EXPECT_FLOAT_EQ(r[3].x, 6.5f);
+  EXPECT_FLOAT_EQ(r[2].y, 1.f);
+}
+
+TEST(ReducedSearch, UpsampleNeverMixesSurfaces) {
+  // Texel values: 0.25 on the near plane, 0.75 on the far one. Every full-resolution pixel
+  // must get exactly its own plane's value, also at the edge (x = 9 is far, texel 4 = pixel 8
+  // near, texel 5 = pixel 10 far).
+  const ViewGBuffer v = two_planes(21, 9, 9);
+  const ViewGBuffer lo = reduce_view(v, 2);
+  HorizonImage h;
+  h.width = lo.width;
+  h.height = lo.height;
+  for (size_t k = 0; k < lo.pixels(); ++k) {
+    const float a = lo.position[k].z < 3 ? 0.25f : 0.75f;
+    h.ao.push_back(a);
+    h.vis.push_back(a);
+    h.bent.push_back(Vec3{0, 0, -a});
+    h.irradiance.push_back(Vec3{a, a, a});
+  }
+  const HorizonImage up = upsample_horizon(v, lo, 2, h, 0.05f);
+  ASSERT_EQ(up.ao.size(), v.pixels());
+  for (int y = 0; y < v.height; ++y)
+    for (int x = 0; x < v.width; ++x) {
+      const size_t p = size_t(y) * v.width + x;
+      const float a = x < 9 ? 0.25f : 0.75f;
+      EXPECT_FLOAT_EQ(up.ao[p], a) << x << "," << y;
+      EXPECT_FLOAT_EQ(up.vis[p], a);
+      EXPECT_FLOAT_EQ(up.bent[p].z, -a);
+      EXPECT_FLOAT_EQ(up.irradiance[p].y, a);
+    }
+}
+
+TEST(ReducedSearch, UpsampleOfASmoothFieldIsBilinear) {
+  const ViewGBuffer v = two_planes(16, 8, 100);  // one plane
+  const ViewGBuffer lo = reduce_view(v, 2);
+  HorizonImage h;
+  h.width = lo.width;
+  h.height = lo.height;
+  for (int j = 0; j < lo.height; ++j)
+    for (int i = 0; i < lo.width; ++i) {
+      h.ao.push_back(0.01f * float(i) + 0.1f * float(j));
+      h.vis.push_back(1.f);
+      h.bent.push_back(Vec3{});
+    }
+  const HorizonImage up = upsample_horizon(v, lo, 2, h, 0.05f);
+  for (int y = 0; y < v.height - 1; ++y)
+    for (int x = 0; x < v.width - 1; ++x)  // the last row and column extrapolate
+      EXPECT_NEAR(up.ao[size_t(y) * v.width + x], 0.005f * x + 0.05f * y, 1e-6) << x << "," << y;
+}
+
+// The 90-degree V-groove of horizon_test.cpp, searched on every second pixel: AO and the cone
+// keep the closed forms within the bounds of the full-resolution search.
+TEST(ReducedSearch, GrooveKeepsTheClosedForm) {
+  const double gamma = 90 * kPi / 180, L = 1.0;
+  const Vec3d bisector{0, std::cos(gamma / 2), std::sin(gamma / 2)};
+  const Camera cam = test::look_at(192, 192, 90, bisector * 2.5, bisector * 0.4);
+  const GBuffer g = test::ray_cast(cam, test::v_groove(gamma, L));
+  Params p;
+  p.method = "horizon";
+  p.interleave = false;
+  p.slices = 32;
+  p.steps = 96;
+  p.radius = 1e3;
+  p.search_scale = 2;
+  const AoFrame f = compute_ao_frame(g, cam, p);
+  int checked = 0;
+  for (int y = 0; y < g.height; ++y)
+    for (int x = 0; x < g.width; ++x) {
+      const size_t i = size_t(y) * g.width + x;
+      if (g.normal[i].z < 0.99f) continue;
+      const Vec3d hit = cam.view_to_world(cam.unproject(x + 0.5, y + 0.5, g.depth[i]));
+      const double d = hit.y;
+      if (d < 0.05 || d > 0.6 || std::fabs(hit.x) > 0.3) continue;
+      const double psi = std::atan2(L * std::sin(gamma), d - L * std::cos(gamma));
+      ++checked;
+      EXPECT_NEAR(f.ao[i], (1 + std::cos(psi)) / 2, 0.02) << x << "," << y << " d=" << d;
+      EXPECT_NEAR(f.cone_cos[i], psi / kPi, 0.025) << x << "," << y << " d=" << d;
+    }
+  EXPECT_GT(checked, 100);
+}
+
+TEST(ReducedSearch, IdenticalBytesForAnyThreadCount) {
+  const Camera cam = test::look_at(131, 77, 60, {0.4, 2.0, 1.5}, {0, 0, 0.2});
+  std::vector<test::HalfPlane> planes = test::v_groove(75 * kPi / 180);
+  planes.push_back({{0.3, 0.5, 0.1}, {0.6, 0.0, 0.8}, {0, 0, 1}});
+  GBuffer g = test::ray_cast(cam, planes);
+  g.diffcol.assign(g.pixels(), Vec3{0.8f, 0.5f, 0.2f});
+  g.diffdir.assign(g.pixels(), Vec3{1, 1, 1});
+  Params p;
+  p.search_scale = 2;
+  p.outputs = {"ao", "bentcone", "irradiance"};
+  AoFrame one, many;
+  tbb::task_arena(1).execute([&] { one = compute_ao_frame(g, cam, p); });
+  tbb::task_arena(4).execute([&] { many = compute_ao_frame(g, cam, p); });
+  EXPECT_EQ(0, std::memcmp(one.ao.data(), many.ao.data(), one.ao.size() * sizeof(float)));
+  EXPECT_EQ(0, std::memcmp(one.bent.data(), many.bent.data(), one.bent.size() * sizeof(Vec3)));
+  EXPECT_EQ(0, std::memcmp(one.irradiance.data(), many.irradiance.data(),
+                           one.irradiance.size() * sizeof(Vec3)));
+}
+
+}  // namespace
+}  // namespace hbil
