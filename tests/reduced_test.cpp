@@ -33,6 +33,18 @@ ViewGBuffer two_planes(int w, int h, int split) {
   return v;
 }
 
+TEST(ReducedSearch, AutoKeeps540PixelsAcrossTheShorterSide) {
+  Params p;  // the default is auto
+  EXPECT_EQ(effective_search_scale(p, 256, 144), 1);
+  EXPECT_EQ(effective_search_scale(p, 1280, 720), 1);
+  EXPECT_EQ(effective_search_scale(p, 1920, 1079), 1);
+  EXPECT_EQ(effective_search_scale(p, 1920, 1080), 2);
+  EXPECT_EQ(effective_search_scale(p, 1080, 1920), 2);  // portrait
+  EXPECT_EQ(effective_search_scale(p, 3840, 2160), 4);
+  p.search_scale = 3;
+  EXPECT_EQ(effective_search_scale(p, 256, 144), 3);
+}
+
 TEST(ReducedSearch, TexelIsThePixelOnACoarserGrid) {
   const ViewGBuffer v = two_planes(13, 7, 5);
   const ViewGBuffer lo = reduce_view(v, 2);

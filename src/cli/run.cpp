@@ -16,6 +16,7 @@
 #include "hbil/ao_frame.h"
 #include "hbil/error.h"
 #include "hbil/march.h"
+#include "hbil/reduced.h"
 #include "hbil/temporal.h"
 #include "io/display.h"
 #include "io/environment.h"
@@ -176,6 +177,16 @@ void run(const RunOptions& o) {
                                  : std::string("scalar reference"))
                 << "\n";
     }
+    const int scale = effective_search_scale(p, first.spec.width, first.spec.height);
+    std::cerr << "hbil: search: "
+              << (scale == 1 ? std::string("every pixel")
+                             : "one pixel of every " + std::to_string(scale) + "x" +
+                                   std::to_string(scale) + " block, upsampled")
+              << (p.search_scale == 0 ? " (search_scale auto for " +
+                                            std::to_string(first.spec.width) + "x" +
+                                            std::to_string(first.spec.height) + ")"
+                                      : std::string())
+              << "\n";
   }
   // Far field: the environment is projected to SH once for the whole run.
   std::optional<SH9> environment;

@@ -70,7 +70,7 @@ HorizonImage search_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& 
   GatherRecord* reuse = gather && p.bounces > 1 ? &record : nullptr;
   // A reduced search (search_scale > 1) marches every f-th pixel of every f-th row and its
   // result is upsampled to v (reduced.h).
-  const int f = p.search_scale;
+  const int f = effective_search_scale(p, v.width, v.height);
   const float tol = float(p.depth_tolerance);
   const ViewGBuffer lo = f > 1 ? reduce_view(v, f) : ViewGBuffer{};
   const ViewGBuffer& sv = f > 1 ? lo : v;

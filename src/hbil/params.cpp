@@ -56,10 +56,11 @@ const std::vector<ParamInfo>& params_table() {
       {"vectorised", &Params::vectorised, 0, 1, "bool",
        "method bitmask: march the pixels of a row in SIMD lanes (AVX-512, AVX2, ... chosen at "
        "run time); false runs the scalar reference, which gives the same results to the bit"},
-      {"search_scale", &Params::search_scale, 1, 8, "pixels",
+      {"search_scale", &Params::search_scale, 0, 8, "pixels",
        "the horizon search and gather run on every n-th pixel of every n-th row (1/n^2 of the "
        "cost) and their result is upsampled to every pixel over the same surface (depth- and "
-       "normal-aware, like the spatial filter); 1 searches at every pixel"},
+       "normal-aware, like the spatial filter); 1 searches at every pixel; 0 (auto): the "
+       "largest n that keeps 540 pixels across the frame's shorter side"},
       {"depth_tolerance", &Params::depth_tolerance, 0, 1, "relative",
        "spatial filter: neighbours farther from the pixel's tangent plane than this fraction of "
        "its depth are not averaged (nor those whose normal is more than 37 degrees off)"},
@@ -130,7 +131,7 @@ const std::vector<std::string>& known_outputs() {
 }
 
 const std::vector<std::string>& output_compressions() {
-  static const std::vector<std::string> c = {"zip", "zips", "piz", "dwaa", "none"};
+  static const std::vector<std::string> c = {"zip", "zips", "piz", "dwaa", "rle", "none"};
   return c;
 }
 

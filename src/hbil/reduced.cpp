@@ -3,6 +3,7 @@
 
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -18,6 +19,11 @@ bool same_surface(const Vec3& P, const Vec3& n, const Vec3& Q, const Vec3& m, fl
 }
 
 }  // namespace
+
+int effective_search_scale(const Params& p, int width, int height) {
+  if (p.search_scale >= 1) return p.search_scale;
+  return std::max(1, std::min(width, height) / kAutoSearchSide);
+}
 
 ViewGBuffer reduce_view(const ViewGBuffer& v, int f) {
   ViewGBuffer lo;
