@@ -123,10 +123,11 @@ HorizonImage upsample_horizon(const ViewGBuffer& v, const ViewGBuffer& lo, int f
         if (best == std::numeric_limits<float>::infinity()) continue;
         take(at, 1.f);
       }
-      out.ao[p] = ao / w;
-      out.vis[p] = vis / w;
-      out.bent[p] = bent / w;
-      if (gather) out.irradiance[p] = irr / w;
+      const float inv = 1.f / w;
+      out.ao[p] = ao * inv;
+      out.vis[p] = vis * inv;
+      out.bent[p] = bent * inv;
+      if (gather) out.irradiance[p] = irr * inv;
     }
   });
   return out;

@@ -127,8 +127,10 @@ Reprojected reproject_gather(const ViewGBuffer& prev, const Camera& prev_cam,
       const double ax = px - fx0, ay = py - fy0;
       const double zc = cur.position[i].z;
       const double max_dist = double(tol.depth) * zc;
-      const Vec3d pw = cur_cam.view_to_world(Vec3d(cur.position[i]));
-      const Vec3d nw = cur_cam.view_dir_to_world(Vec3d(cur.normal[i]));
+      // The pixel's point and normal in the previous frame's view space, once, so that the four
+      // neighbours are compared where they are stored (distances and angles are the same).
+      const Vec3d pp = prev_cam.world_to_view(cur_cam.view_to_world(Vec3d(cur.position[i])));
+      const Vec3d np = prev_cam.world_dir_to_view(cur_cam.view_dir_to_world(Vec3d(cur.normal[i])));
       std::fill(acc.begin(), acc.end(), 0.0);
       double wsum = 0;
       for (int k = 0; k < 4; ++k) {
@@ -137,16 +139,16 @@ Reprojected reproject_gather(const ViewGBuffer& prev, const Camera& prev_cam,
         if (!(w > 0) || xx < 0 || xx >= prev.width || yy < 0 || yy >= prev.height) continue;
         const size_t s = size_t(yy) * prev.width + xx;
         if (prev.is_background(s)) continue;
-        const Vec3d d = prev_cam.view_to_world(Vec3d(prev.position[s])) - pw;
+        const Vec3d d = Vec3d(prev.position[s]) - pp;
         if (!(dot(d, d) <= max_dist * max_dist)) continue;
-        if (!(dot(prev_cam.view_dir_to_world(Vec3d(prev.normal[s])), nw) >= double(tol.normal_cos)))
-          continue;
+        if (!(dot(Vec3d(prev.normal[s]), np) >= double(tol.normal_cos))) continue;
         wsum += w;
         for (int c = 0; c < channels; ++c) acc[c] += w * prev_value[s * channels + size_t(c)];
       }
       if (!(wsum > 0)) continue;
       r.valid[i] = 1;
-      for (int c = 0; c < channels; ++c) r.value[i * channels + c] = float(acc[c] / wsum);
+      const double inv = 1 / wsum;
+      for (int c = 0; c < channels; ++c) r.value[i * channels + c] = float(acc[c] * inv);
     }
   });
   return r;

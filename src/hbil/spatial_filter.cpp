@@ -39,10 +39,11 @@ HorizonImage spatial_filter(const ViewGBuffer& g, const HorizonImage& in, float 
         }
       }
       // w >= 1: the centre pixel always passes its own test.
-      out.ao[c] = ao / w;
-      out.vis[c] = vis / w;
-      out.bent[c] = bent / w;
-      if (gather) out.irradiance[c] = irr / w;
+      const float inv = 1.f / w;  // one division, not eight
+      out.ao[c] = ao * inv;
+      out.vis[c] = vis * inv;
+      out.bent[c] = bent * inv;
+      if (gather) out.irradiance[c] = irr * inv;
     }
   });
   return out;

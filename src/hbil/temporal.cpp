@@ -42,7 +42,7 @@ AoFrame TemporalChain::process(const GBuffer& g, const Camera& cam, int frame, b
                                const SH9* environment, TemporalReport* report) {
   TemporalReport rep;
   if (p_.wants("auto")) p_ = resolve_frame_outputs(g, p_);  // once, on the first frame
-  const ViewGBuffer v = make_view_gbuffer(g, cam, p_);
+  ViewGBuffer v = make_view_gbuffer(g, cam, p_);
   const size_t n_px = v.pixels();
   size_t geometry = 0;
   for (size_t i = 0; i < n_px; ++i) geometry += !v.is_background(i);
@@ -154,7 +154,7 @@ AoFrame TemporalChain::process(const GBuffer& g, const Camera& cam, int frame, b
   AoFrame out = assemble_frame(v, g, cam, p_, h, environment);
   out.history.resize(n_px);
   for (size_t i = 0; i < n_px; ++i) out.history[i] = next[kChannels * i + 8];
-  view_ = v;
+  view_ = std::move(v);
   cam_ = cam;
   frame_ = frame;
   data_ = std::move(next);
