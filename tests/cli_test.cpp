@@ -156,7 +156,7 @@ TEST_F(Cli, RunWritesLayersAndMetadata) {
     EXPECT_EQ(px.spec.get_string_attribute("Camera"), "Camera");
     EXPECT_EQ(px.spec.get_string_attribute("Scene"), "room_poles");
     EXPECT_EQ(px.spec.get_string_attribute("Frame"), std::to_string(frame));
-    EXPECT_EQ(px.spec.get_string_attribute("compression"), "piz");
+    EXPECT_EQ(px.spec.get_string_attribute("compression"), "rle");
     // Colour layers as half, data layers (ao, bentcone) as float (colour_half = true).
     ASSERT_EQ(px.spec.channelformats.size(), names.size());
     for (size_t c = 0; c < names.size(); ++c) {

@@ -68,9 +68,9 @@ struct Params {
   // "auto": ao, bentcone, and irradiance, indirect and composite when the input has the
   // colour passes they need (see resolve_outputs); may be combined with explicit names.
   std::vector<std::string> outputs = {"auto"};
-  // EXR compression of the output frames: "zip", "zips", "piz", "dwaa" (lossy on channels
-  // ending in R, G, B or Y, so on data layers too), "none".
-  std::string compression = "piz";
+  // EXR compression of the output frames: "zip", "zips", "piz", "rle", "dwaa" (lossy on
+  // channels ending in R, G, B or Y, so on data layers too), "none".
+  std::string compression = "rle";
   bool colour_half = true;  // colour layers as half floats (data layers stay 32-bit float)
 
   static std::map<std::string, nlohmann::json> default_passes();
