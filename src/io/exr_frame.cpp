@@ -208,15 +208,20 @@ std::vector<std::string> fields_needed(const InputFrame& f, const Params& reques
 
 namespace {
 
+// Where the channels of one field go: channel c of pixel i at dst[i * idx.size() + c].
+struct FieldTarget {
+  std::vector<int> idx;  // the field's channels in the file
+  float* dst;
+};
+
 // Reads the channels of several fields in one pass: EXR compresses all channels of a block
 // of scanlines together, so every separate read would decompress the whole file again.
 // OpenEXR files go through OpenEXR itself, which decompresses each block once and converts
 // only the channels asked for, straight into their fields (in parallel over blocks, on
 // OpenEXR's thread pool); other formats through OpenImageIO in blocks of 64 rows over the
 // smallest channel range holding all fields.
-std::vector<std::vector<float>> read_exr_channels(const InputFrame& f,
-                                                  const std::vector<std::vector<int>>& fields) {
-  std::vector<std::vector<float>> out;
+void read_exr_channels(const InputFrame& f, const std::vector<FieldTarget>& fields) {
+  if (fields.empty()) return;
   try {
     Imf::InputFile file(f.path.c_str(), Imf::globalThreadCount());
     const Imath::Box2i dw = file.header().dataWindow();
@@ -224,15 +229,13 @@ std::vector<std::vector<float>> read_exr_channels(const InputFrame& f,
     if (int(w) != f.spec.width || int(h) != f.spec.height)
       throw Error(Exit::input, f.where() + ": the data window changed since the header was read");
     Imf::FrameBuffer fb;
-    for (const auto& idx : fields) {
-      const size_t m = idx.size();
-      out.emplace_back(w * h * m);
+    for (const FieldTarget& t : fields) {
+      const size_t m = t.idx.size();
       for (size_t c = 0; c < m; ++c)
-        fb.insert(f.spec.channelnames[idx[c]],
-                  Imf::Slice::Make(Imf::FLOAT, out.back().data() + c, dw, sizeof(float) * m,
+        fb.insert(f.spec.channelnames[t.idx[c]],
+                  Imf::Slice::Make(Imf::FLOAT, t.dst + c, dw, sizeof(float) * m,
                                    sizeof(float) * m * w));
     }
-    if (fields.empty()) return out;
     file.setFrameBuffer(fb);
     file.readPixels(dw.min.y, dw.max.y);
   } catch (const Error&) {
@@ -240,36 +243,31 @@ std::vector<std::vector<float>> read_exr_channels(const InputFrame& f,
   } catch (const std::exception& e) {
     throw Error(Exit::input, f.where() + ": cannot read its pixels: " + e.what());
   }
-  return out;
 }
 
-std::vector<std::vector<float>> read_channels(OIIO::ImageInput& in, const InputFrame& f,
-                                              const std::vector<std::vector<int>>& fields) {
+void read_channels(const InputFrame& f, const std::vector<FieldTarget>& fields) {
+  if (fields.empty()) return;
+  auto in = OIIO::ImageInput::open(f.path);
+  if (!in) throw Error(Exit::input, f.where() + ": cannot read: " + OIIO::geterror());
   const int w = f.spec.width, h = f.spec.height;
   int lo = f.spec.nchannels, hi = 0;
-  std::vector<std::vector<float>> out;
-  for (const auto& idx : fields) {
-    for (int c : idx) lo = std::min(lo, c), hi = std::max(hi, c + 1);
-    out.emplace_back(size_t(w) * h * idx.size());
-  }
-  if (fields.empty()) return out;
+  for (const FieldTarget& t : fields)
+    for (int c : t.idx) lo = std::min(lo, c), hi = std::max(hi, c + 1);
   const int n = hi - lo, rows = 64;
   std::vector<float> block(size_t(w) * rows * n);
   for (int y0 = 0; y0 < h; y0 += rows) {
     const int y1 = std::min(h, y0 + rows);
-    if (!in.read_scanlines(0, 0, f.spec.y + y0, f.spec.y + y1, 0, lo, hi, OIIO::TypeDesc::FLOAT,
-                           block.data()))
+    if (!in->read_scanlines(0, 0, f.spec.y + y0, f.spec.y + y1, 0, lo, hi, OIIO::TypeDesc::FLOAT,
+                            block.data()))
       throw Error(Exit::input, f.where() + ": cannot read rows " + std::to_string(y0) + "-" +
-                                   std::to_string(y1 - 1) + ": " + in.geterror());
-    for (size_t k = 0; k < fields.size(); ++k) {
-      const auto& idx = fields[k];
-      const size_t m = idx.size();
+                                   std::to_string(y1 - 1) + ": " + in->geterror());
+    for (const FieldTarget& t : fields) {
+      const size_t m = t.idx.size();
       for (size_t i = 0; i < size_t(w) * (y1 - y0); ++i)
         for (size_t c = 0; c < m; ++c)
-          out[k][(size_t(y0) * w + i) * m + c] = block[i * n + (idx[c] - lo)];
+          t.dst[(size_t(y0) * w + i) * m + c] = block[i * n + (t.idx[c] - lo)];
     }
   }
-  return out;
 }
 
 [[noreturn]] void bad_value(const InputFrame& f, int channel, size_t i, float v,
@@ -286,48 +284,55 @@ GBuffer read_fields(const InputFrame& f, const std::vector<std::string>& fields,
   GBuffer g;
   g.width = f.spec.width;
   g.height = f.spec.height;
-  std::vector<std::vector<int>> indices;
-  for (const auto& field : fields) indices.push_back(f.channels.at(field));
-  std::vector<std::vector<float>> data;
-  if (f.openexr) {
-    data = read_exr_channels(f, indices);
-  } else {
-    auto in = OIIO::ImageInput::open(f.path);
-    if (!in) throw Error(Exit::input, f.where() + ": cannot read: " + OIIO::geterror());
-    data = read_channels(*in, f, indices);
+  const size_t n = g.pixels();
+  // Every field is read straight into its own array of the G-buffer, then checked in place.
+  auto scalar = [&](const std::string& field) -> std::vector<float>& {
+    if (field == "depth") return g.depth;
+    if (field == "backdepth") return g.backdepth;
+    if (field == "alpha") return g.alpha;
+    if (field == "vector") return g.motion;
+    return g.metallic;
+  };
+  std::vector<FieldTarget> targets;
+  for (const auto& field : fields) {
+    const std::vector<int>& idx = f.channels.at(field);
+    float* dst;
+    if (std::vector<Vec3>* rgb = g.rgb(field)) {
+      rgb->resize(n);
+      dst = &rgb->data()->x;
+    } else {
+      std::vector<float>& v = scalar(field);
+      v.resize(n * idx.size());
+      dst = v.data();
+    }
+    targets.push_back({idx, dst});
   }
+  if (f.openexr)
+    read_exr_channels(f, targets);
+  else
+    read_channels(f, targets);
   for (size_t k = 0; k < fields.size(); ++k) {
     const std::string& field = fields[k];
-    const std::vector<int>& idx = indices[k];
-    std::vector<float>& v = data[k];
+    const std::vector<int>& idx = targets[k].idx;
+    const float* v = targets[k].dst;
+    const size_t m = idx.size(), count = n * m;
     if (field == "depth" || field == "backdepth") {
-      for (size_t i = 0; i < v.size(); ++i) {
+      for (size_t i = 0; i < count; ++i) {
         if (!std::isfinite(v[i])) bad_value(f, idx[0], i, v[i], "non-finite " + field);
         if (v[i] < 0) bad_value(f, idx[0], i, v[i], "negative " + field);
       }
-      (field == "depth" ? g.depth : g.backdepth) = std::move(v);
     } else if (field == "alpha") {
-      g.alpha = std::move(v);
+      // any value is taken: only alpha > 0 matters (gbuffer.h)
     } else if (field == "vector") {
       // Blender: the previous-frame position of pixel (col, row), rows top-down, is
       // (col + X, row − Y) (samples/README.md); stored as the raster offset (X, −Y).
-      for (size_t i = 0; i < v.size(); ++i)
+      for (size_t i = 0; i < count; ++i)
         if (!std::isfinite(v[i])) bad_value(f, idx[i % 2], i / 2, v[i], "non-finite vector");
-      for (size_t i = 1; i < v.size(); i += 2) v[i] = -v[i];
-      g.motion = std::move(v);
-    } else if (field == "metallic") {
-      for (size_t i = 0; i < v.size(); ++i)
-        if (!std::isfinite(v[i])) bad_value(f, idx[0], i, v[i], "non-finite metallic");
-      g.metallic = std::move(v);
+      for (size_t i = 1; i < count; i += 2) g.motion[i] = -g.motion[i];
     } else {
-      std::vector<Vec3>& dst = *g.rgb(field);
-      dst.resize(g.pixels());
-      for (size_t i = 0; i < g.pixels(); ++i) {
-        for (int k = 0; k < 3; ++k)
-          if (!std::isfinite(v[3 * i + k]))
-            bad_value(f, idx[k], i, v[3 * i + k], "non-finite " + field);
-        dst[i] = {v[3 * i], v[3 * i + 1], v[3 * i + 2]};
-      }
+      const std::string what = "non-finite " + field;
+      for (size_t i = 0; i < count; ++i)
+        if (!std::isfinite(v[i])) bad_value(f, idx[i % m], i / m, v[i], what);
     }
   }
   return g;
