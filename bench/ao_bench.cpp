@@ -5,17 +5,20 @@
 // render of samples/blender/room_poles.py --size 1920x1080. What is timed is the search of
 // one frame (search_frame: the march of every pixel, interleaved, and the spatial filter),
 // the part `hbil run -v` reports inside "compute". Counters:
-//   samples/s   depth samples marched per second: pixels x slices x 2 sides x steps, plus
-//               gather_steps per side when the irradiance gather runs
+//   samples/s   depth samples marched per second: searched pixels x slices x 2 sides x steps,
+//               plus gather_steps per side when the irradiance gather runs (searched pixels:
+//               the frame's, or 1/n² of them with search_scale n)
 //   Mpixels/s   frame pixels per second
 // Arguments: gather (0: ao and bentcone only, 1: with the irradiance gather), vectorised
-// (1: SIMD march, 0: the scalar reference), steps per side. BM_Frame times the whole
-// single-frame computation instead (default outputs or ao + bentcone).
+// (1: SIMD march, 0: the scalar reference), steps per side, search_scale (0: auto, the
+// default; 1: every pixel). BM_Frame times the whole single-frame computation instead
+// (default outputs or ao + bentcone).
 #include <benchmark/benchmark.h>
 
 #include <cstdlib>
 
 #include "hbil/ao_frame.h"
+#include "hbil/reduced.h"
 #include "io/camera_io.h"
 #include "io/exr_frame.h"
 
@@ -50,6 +53,7 @@ void BM_Search(benchmark::State& state) {
   Params p;  // the default preset
   p.vectorised = state.range(1) != 0;
   p.steps = int(state.range(2));
+  p.search_scale = int(state.range(3));
   p.outputs = gather ? std::vector<std::string>{"ao", "bentcone", "irradiance"}
                      : std::vector<std::string>{"ao", "bentcone"};
   const Frame& f = frame();
@@ -59,12 +63,15 @@ void BM_Search(benchmark::State& state) {
     benchmark::DoNotOptimize(h.ao.data());
   }
   const double pixels = double(f.g.width) * f.g.height;
+  const int n = effective_search_scale(p, f.g.width, f.g.height);
+  const double searched = double((f.g.width + n - 1) / n) * double((f.g.height + n - 1) / n);
   const int per_side = p.steps + (gather ? p.gather_steps : 0);
-  state.counters["samples/s"] = benchmark::Counter(pixels * p.slices * 2 * per_side,
+  state.counters["samples/s"] = benchmark::Counter(searched * p.slices * 2 * per_side,
                                                    benchmark::Counter::kIsIterationInvariantRate);
   state.counters["Mpixels/s"] =
       benchmark::Counter(pixels * 1e-6, benchmark::Counter::kIsIterationInvariantRate);
-  state.SetLabel(std::to_string(f.g.width) + "x" + std::to_string(f.g.height));
+  state.SetLabel(std::to_string(f.g.width) + "x" + std::to_string(f.g.height) + ", search 1 in " +
+                 std::to_string(n) + "x" + std::to_string(n));
 }
 
 // The whole single-frame computation (compute_ao_frame: view-space G-buffer, search, spatial
@@ -89,21 +96,24 @@ BENCHMARK(BM_Frame)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
-// The default preset (16 steps): AO only and with the gather, SIMD and scalar.
+// The default preset (16 steps): AO only and with the gather, SIMD and scalar; and the SIMD
+// march at every pixel (search_scale 1).
 BENCHMARK(BM_Search)
-    ->ArgNames({"gather", "simd", "steps"})
-    ->Args({0, 1, 16})
-    ->Args({1, 1, 16})
-    ->Args({0, 0, 16})
-    ->Args({1, 0, 16})
+    ->ArgNames({"gather", "simd", "steps", "scale"})
+    ->Args({0, 1, 16, 0})
+    ->Args({1, 1, 16, 0})
+    ->Args({0, 0, 16, 0})
+    ->Args({1, 0, 16, 0})
+    ->Args({0, 1, 16, 1})
+    ->Args({1, 1, 16, 1})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 // Cost against steps per side (SIMD, AO only).
 BENCHMARK(BM_Search)
-    ->ArgNames({"gather", "simd", "steps"})
-    ->Args({0, 1, 8})
-    ->Args({0, 1, 32})
-    ->Args({0, 1, 64})
+    ->ArgNames({"gather", "simd", "steps", "scale"})
+    ->Args({0, 1, 8, 0})
+    ->Args({0, 1, 32, 0})
+    ->Args({0, 1, 64, 0})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 

@@ -1,0 +1,82 @@
+#!/usr/bin/env bash
+# equal_error_hd.sh: hbil against Cycles at 1920x1080, timed in one run (README "Against Cycles
+# at equal error").
+#
+#   HD_ROOM_POLES=dir HD_COURTYARD=dir bench/equal_error_hd.sh [HBIL]   (default: build/hbil)
+#   SPP_ROOM_POLES="8 16" SPP_COURTYARD="4 8"   the Cycles rungs around hbil's equal-error
+#       point of the 256x144 ladder (bench/equal_error.sh), the defaults
+#   RUNS=3 BLENDER=blender KEEP=dir
+#
+# Each dir holds a 1920x1080 sequence of the scene rendered as samples/README.md says
+# (`--size 1920x1080 --samples 1`, back faces merged, sidecars), frames 1-4. For every scene:
+#  - Cycles renders frame 1 at 1920x1080 at each rung, seed 7, with full GI (`--mode main`)
+#    and with direct light only (`--bounces 0`); its time is `cycles.ViewLayer.render_time`
+#    from the EXR header (path tracing only), as in equal_error.sh;
+#  - `hbil run DIR/frame_####.exr --no-display` (default preset) RUNS times, before, between
+#    and after the renders, so that a shared machine's load falls on both; median of its
+#    summary line's "s per frame" (reading, computing, writing).
+# Prints one line per render and per hbil run, then the medians. The equal-error time is
+# interpolated in log time between the rungs by the caller (README), at the spp the 256x144
+# ladder gives; Cycles' noise per pixel at a given spp, and so its PSNR, does not depend on
+# the resolution.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+hbil=${1:-build/hbil}
+runs=${RUNS:-3}
+blender=${BLENDER:-blender}
+work=${KEEP:-$(mktemp -d)}
+[ -n "${KEEP:-}" ] || trap 'rm -rf "$work"' EXIT
+mkdir -p "$work"
+echo "- date: $(date -u +%Y-%m-%dT%H:%MZ), $(nproc) cores, load at start: $(uptime | sed 's/.*load average: //')"
+
+seconds() {  # "00:06.21" -> 6.215 (Blender truncates to 10 ms)
+  python3 -c 'import sys
+s = 0.0
+for part in sys.argv[1].split(":"): s = 60 * s + float(part)
+print("%.3f" % (s + 0.005))' "$1"
+}
+render() {  # render SCENE KIND SPP
+  local s=$1 kind=$2 n=$3 dir extra=() t
+  dir="$work/$s/${kind}_$n"
+  [ "$kind" = direct ] && extra=(--bounces 0)
+  rm -rf "$dir"
+  mkdir -p "$dir"
+  "$blender" -b --factory-startup --python "samples/blender/$s.py" -- --out "$dir" --mode main \
+    --samples "$n" --seed 7 --frames 1-1 --size 1920x1080 "${extra[@]}" > "$dir/log" 2>&1 ||
+    { tail -n 20 "$dir/log" >&2; exit 1; }
+  t=$(iinfo -v "$dir/frame_0001.exr" | sed -n 's/^ *cycles\.ViewLayer\.render_time: *"\(.*\)"/\1/p')
+  echo "$s cycles $kind $n spp: $(seconds "$t") s"
+}
+hbil_run() {  # hbil_run SCENE DIR
+  rm -rf "$work/out"
+  "$hbil" run "$2/frame_####.exr" -o "$work/out/frame_####.exr" --no-display 2>&1 |
+    sed -n "s/.* \([0-9.]*\) s per frame.*/$1 hbil: \1 s per frame/p"
+}
+
+for s in room_poles courtyard; do
+  var=HD_${s^^}
+  dir=${!var:-}
+  [ -n "$dir" ] || { echo "- $s: $var not set, skipped"; continue; }
+  spp_var=SPP_${s^^}
+  default_spp="8 16"
+  [ "$s" = courtyard ] && default_spp="4 8"
+  read -r -a rungs <<< "${!spp_var:-$default_spp}"
+  jobs=()
+  for n in "${rungs[@]}"; do jobs+=("main $n" "direct $n"); done
+  {
+    hbil_run "$s" "$dir"
+    for ((k = 0; k < ${#jobs[@]}; ++k)); do
+      read -r kind n <<< "${jobs[$k]}"
+      render "$s" "$kind" "$n"
+      # hbil between the renders, RUNS times in all
+      if ((k < runs - 2)); then hbil_run "$s" "$dir"; fi
+    done
+    hbil_run "$s" "$dir"
+  } | tee "$work/$s.txt"
+  python3 - "$work/$s.txt" "$s" <<'PY'
+import re, statistics, sys
+t = [float(x) for x in re.findall(r"hbil: ([0-9.]+) s per frame", open(sys.argv[1]).read())]
+print("%s: hbil median %.3f s per frame over %d runs" % (sys.argv[2], statistics.median(t), len(t)))
+PY
+done
+echo "- load at end: $(uptime | sed 's/.*load average: //')"
