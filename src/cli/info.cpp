@@ -4,6 +4,7 @@
 
 #include "cli/commands.h"
 #include "hbil/error.h"
+#include "hbil/reduced.h"
 #include "io/camera_io.h"
 #include "io/exr_frame.h"
 #include "io/sequence.h"
@@ -67,6 +68,7 @@ void info(const std::string& path, const ParamOptions& po) {
     std::cout << "not available: " << e.what() << "\n";
   }
 
+  std::cout << "search: " << describe_search(p, f.spec.width, f.spec.height) << "\n";
   std::cout << "outputs:\n";
   for (const auto& o : known_outputs()) {
     Params one = p;

@@ -177,15 +177,7 @@ void run(const RunOptions& o) {
                                  : std::string("scalar reference"))
                 << "\n";
     }
-    const int scale = effective_search_scale(p, first.spec.width, first.spec.height);
-    std::cerr << "hbil: search: "
-              << (scale == 1 ? std::string("every pixel")
-                             : "one pixel of every " + std::to_string(scale) + "x" +
-                                   std::to_string(scale) + " block, upsampled")
-              << (p.search_scale == 0 ? " (search_scale auto for " +
-                                            std::to_string(first.spec.width) + "x" +
-                                            std::to_string(first.spec.height) + ")"
-                                      : std::string())
+    std::cerr << "hbil: search: " << describe_search(p, first.spec.width, first.spec.height)
               << "\n";
   }
   // Far field: the environment is projected to SH once for the whole run.

@@ -25,6 +25,15 @@ int effective_search_scale(const Params& p, int width, int height) {
   return std::max(1, std::min(width, height) / kAutoSearchSide);
 }
 
+std::string describe_search(const Params& p, int width, int height) {
+  const int n = effective_search_scale(p, width, height);
+  const std::string side = std::to_string(n);
+  std::string s = n == 1 ? "every pixel" : "one pixel of every " + side + "x" + side + " block, upsampled";
+  if (p.search_scale == 0)
+    s += " (search_scale auto for " + std::to_string(width) + "x" + std::to_string(height) + ")";
+  return s;
+}
+
 ViewGBuffer reduce_view(const ViewGBuffer& v, int f) {
   ViewGBuffer lo;
   lo.width = (v.width + f - 1) / f;

@@ -19,6 +19,7 @@
 // plane among those facing its way, else the unoccluded default.
 #pragma once
 
+#include <string>
 #include <vector>
 
 #include "hbil/gbuffer.h"
@@ -33,6 +34,9 @@ namespace hbil {
 constexpr int kAutoSearchSide = 540;
 // Params::search_scale resolved for a frame of width x height (the value itself when >= 1).
 int effective_search_scale(const Params& p, int width, int height);
+// What the search does on such a frame, for logs: "every pixel", "one pixel of every 2x2
+// block, upsampled (search_scale auto for 1920x1080)".
+std::string describe_search(const Params& p, int width, int height);
 
 // Every f-th pixel of every f-th row of v (f >= 1), with scale = v.scale * f.
 ViewGBuffer reduce_view(const ViewGBuffer& v, int f);
