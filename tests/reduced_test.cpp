@@ -2,6 +2,8 @@
 // reduced buffer is the full one on a coarser grid, the upsample never mixes surfaces, the
 // radiance block mean stays on the texel's surface, and a reduced search keeps the closed
 // forms of the V-groove.
+#include "hbil/reduced.h"
+
 #include <gtest/gtest.h>
 #include <tbb/task_arena.h>
 
@@ -11,7 +13,6 @@
 
 #include "analytic_scenes.h"
 #include "hbil/ao_frame.h"
-#include "hbil/reduced.h"
 
 namespace hbil {
 namespace {

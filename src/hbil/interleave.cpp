@@ -28,7 +28,9 @@ float shifted(float jitter, float s) {
   return j >= 1.f ? j - 1.f : j;
 }
 
-HorizonImage blank(const ViewGBuffer& g, bool gather) {
+}  // namespace
+
+HorizonImage unoccluded_image(const ViewGBuffer& g, bool gather) {
   HorizonImage out;
   out.width = g.width;
   out.height = g.height;
@@ -38,8 +40,6 @@ HorizonImage blank(const ViewGBuffer& g, bool gather) {
   if (gather) out.irradiance.assign(g.pixels(), Vec3{});
   return out;
 }
-
-}  // namespace
 
 void interleaved_angles(int phase, int slices, float* phi) {
   for (int s = 0; s < slices; ++s)
@@ -53,7 +53,7 @@ float interleaved_jitter(int phase) {
 
 HorizonImage horizon_full(const ViewGBuffer& g, const HorizonConfig& c, int slices,
                           const std::vector<Vec3>* radiance) {
-  HorizonImage out = blank(g, radiance != nullptr);
+  HorizonImage out = unoccluded_image(g, radiance != nullptr);
   std::vector<float> phi(slices);
   for (int s = 0; s < slices; ++s) phi[s] = kPi * (float(s) + 0.5f) / float(slices) + c.rotation;
   const std::vector<float> fraction = step_fractions(c, shifted(0.5f, c.jitter_shift));
@@ -94,7 +94,7 @@ HorizonImage horizon_interleaved(const ViewGBuffer& g, const HorizonConfig& c, i
                                  GatherRecord* record) {
   if (!c.bitmask || !radiance) record = nullptr;
   const bool replay = record && record->filled;
-  HorizonImage out = replay ? record->first : blank(g, radiance != nullptr);
+  HorizonImage out = replay ? record->first : unoccluded_image(g, radiance != nullptr);
   // Sub-buffer of phase (ox, oy): texel (i, j) is full-resolution pixel (4i + ox, 4j + oy).
   struct Sub {
     int ox, oy, w, h;

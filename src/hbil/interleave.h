@@ -29,6 +29,32 @@ struct HorizonImage {
   std::vector<Vec3> irradiance;  // E_near / π (eq. 16-18); empty without a radiance source
 };
 
+// The result of a search that found nothing: ao = vis = 1, bent = 0 (and irradiance = 0 when
+// `gather`), at g's size; what background pixels keep.
+HorizonImage unoccluded_image(const ViewGBuffer& g, bool gather);
+
+// A weighted mean of search results (the spatial filter's and the upsample's): add() texel k
+// of an image with weight w, then store() the mean into pixel p.
+struct HorizonMean {
+  float ao = 0, vis = 0, w = 0;
+  Vec3 bent, irradiance;
+  void add(const HorizonImage& h, size_t k, float wk) {
+    ao += wk * h.ao[k];
+    vis += wk * h.vis[k];
+    bent += h.bent[k] * wk;
+    if (!h.irradiance.empty()) irradiance += h.irradiance[k] * wk;
+    w += wk;
+  }
+  // w > 0.
+  void store(HorizonImage& out, size_t p) const {
+    const float inv = 1.f / w;  // one division, not eight
+    out.ao[p] = ao * inv;
+    out.vis[p] = vis * inv;
+    out.bent[p] = bent * inv;
+    if (!out.irradiance.empty()) out.irradiance[p] = irradiance * inv;
+  }
+};
+
 // Slice angles and step jitter of one of the 16 pixels of the 4x4 block
 // (phase = (y % 4) * 4 + x % 4).
 void interleaved_angles(int phase, int slices, float* phi);

@@ -7,18 +7,9 @@
 #include <cmath>
 #include <limits>
 
+#include "hbil/spatial_filter.h"
+
 namespace hbil {
-
-namespace {
-
-// The spatial filter's same-surface test (spatial_filter.h), here between a pixel (P, n) and
-// a texel's point Q and normal m.
-constexpr float kNormalCos = 0.8f;
-bool same_surface(const Vec3& P, const Vec3& n, const Vec3& Q, const Vec3& m, float tol) {
-  return std::fabs(dot(Q - P, n)) <= tol && dot(m, n) >= kNormalCos;
-}
-
-}  // namespace
 
 int effective_search_scale(const Params& p, int width, int height) {
   if (p.search_scale >= 1) return p.search_scale;
@@ -28,7 +19,8 @@ int effective_search_scale(const Params& p, int width, int height) {
 std::string describe_search(const Params& p, int width, int height) {
   const int n = effective_search_scale(p, width, height);
   const std::string side = std::to_string(n);
-  std::string s = n == 1 ? "every pixel" : "one pixel of every " + side + "x" + side + " block, upsampled";
+  std::string s =
+      n == 1 ? "every pixel" : "one pixel of every " + side + "x" + side + " block, upsampled";
   if (p.search_scale == 0)
     s += " (search_scale auto for " + std::to_string(width) + "x" + std::to_string(height) + ")";
   return s;
@@ -79,14 +71,7 @@ std::vector<Vec3> reduce_radiance(const ViewGBuffer& v, const ViewGBuffer& lo, i
 
 HorizonImage upsample_horizon(const ViewGBuffer& v, const ViewGBuffer& lo, int f,
                               const HorizonImage& h, float depth_tolerance) {
-  HorizonImage out;
-  out.width = v.width;
-  out.height = v.height;
-  out.ao.assign(v.pixels(), 1.f);
-  out.vis.assign(v.pixels(), 1.f);
-  out.bent.assign(v.pixels(), Vec3{});
-  const bool gather = !h.irradiance.empty();
-  if (gather) out.irradiance.assign(v.pixels(), Vec3{});
+  HorizonImage out = unoccluded_image(v, !h.irradiance.empty());
   const float inv_f = 1.f / float(f);
   tbb::parallel_for(0, v.height, [&](int y) {
     const int j0 = y / f;
@@ -98,15 +83,7 @@ HorizonImage upsample_horizon(const ViewGBuffer& v, const ViewGBuffer& lo, int f
       const float tol = depth_tolerance * P.z;
       const int i0 = x / f;
       const float tx = float(x - f * i0) * inv_f;
-      float ao = 0, vis = 0, w = 0;
-      Vec3 bent, irr;
-      auto take = [&](size_t k, float wk) {
-        ao += wk * h.ao[k];
-        vis += wk * h.vis[k];
-        bent += h.bent[k] * wk;
-        if (gather) irr += h.irradiance[k] * wk;
-        w += wk;
-      };
+      HorizonMean mean;
       for (int dj = 0; dj < 2; ++dj)
         for (int di = 0; di < 2; ++di) {
           const int i = i0 + di, j = j0 + dj;
@@ -115,9 +92,9 @@ HorizonImage upsample_horizon(const ViewGBuffer& v, const ViewGBuffer& lo, int f
           const size_t k = size_t(j) * lo.width + i;
           if (lo.is_background(k) || !same_surface(P, n, lo.position[k], lo.normal[k], tol))
             continue;
-          take(k, wk);
+          mean.add(h, k, wk);
         }
-      if (!(w > 0.f)) {
+      if (!(mean.w > 0.f)) {
         // No texel on this pixel's surface: the nearest to its tangent plane that faces its
         // way, among the 4x4 texels around it.
         float best = std::numeric_limits<float>::infinity();
@@ -130,13 +107,9 @@ HorizonImage upsample_horizon(const ViewGBuffer& v, const ViewGBuffer& lo, int f
             if (dist < best) best = dist, at = k;
           }
         if (best == std::numeric_limits<float>::infinity()) continue;
-        take(at, 1.f);
+        mean.add(h, at, 1.f);
       }
-      const float inv = 1.f / w;
-      out.ao[p] = ao * inv;
-      out.vis[p] = vis * inv;
-      out.bent[p] = bent * inv;
-      if (gather) out.irradiance[p] = irr * inv;
+      mean.store(out, p);
     }
   });
   return out;

@@ -10,10 +10,19 @@
 // normal is within acos(0.8) ~ 37 degrees of the centre's. Weights are 0 or 1.
 #pragma once
 
+#include <cmath>
+
 #include "hbil/gbuffer.h"
 #include "hbil/interleave.h"
 
 namespace hbil {
+
+// The same-surface test of the filter (and of the reduced search's upsample, reduced.h): the
+// point Q with normal m lies within `tol` of the tangent plane of (P, n) and m is within
+// acos(0.8) of n.
+inline bool same_surface(const Vec3& P, const Vec3& n, const Vec3& Q, const Vec3& m, float tol) {
+  return std::fabs(dot(Q - P, n)) <= tol && dot(m, n) >= 0.8f;
+}
 
 HorizonImage spatial_filter(const ViewGBuffer& g, const HorizonImage& in, float depth_tolerance);
 

@@ -263,8 +263,7 @@ std::string write_display_temporary(const std::string& final_path, const std::ve
       for (int c = 0; c < fc; ++c) {
         const float v = buf[i * tc + c];
         // v + 0.5 truncated is lround for the non-negative values left after the clamp.
-        bytes[i * fc + c] =
-            std::isnan(v) ? 0 : uint8_t(255.0f * std::clamp(v, 0.0f, 1.0f) + 0.5f);
+        bytes[i * fc + c] = std::isnan(v) ? 0 : uint8_t(255.0f * std::clamp(v, 0.0f, 1.0f) + 0.5f);
       }
   }
 

@@ -1,15 +1,15 @@
 // exr_frame.cpp: see exr_frame.h.
 #include "io/exr_frame.h"
 
-#include <cmath>
-#include <filesystem>
-#include <sstream>
-
 #include <OpenEXR/ImfChannelList.h>
 #include <OpenEXR/ImfFrameBuffer.h>
 #include <OpenEXR/ImfHeader.h>
 #include <OpenEXR/ImfInputFile.h>
 #include <OpenEXR/ImfThreading.h>
+
+#include <cmath>
+#include <filesystem>
+#include <sstream>
 
 #include "hbil/error.h"
 #include "io/camera_io.h"
@@ -232,9 +232,9 @@ void read_exr_channels(const InputFrame& f, const std::vector<FieldTarget>& fiel
     for (const FieldTarget& t : fields) {
       const size_t m = t.idx.size();
       for (size_t c = 0; c < m; ++c)
-        fb.insert(f.spec.channelnames[t.idx[c]],
-                  Imf::Slice::Make(Imf::FLOAT, t.dst + c, dw, sizeof(float) * m,
-                                   sizeof(float) * m * w));
+        fb.insert(
+            f.spec.channelnames[t.idx[c]],
+            Imf::Slice::Make(Imf::FLOAT, t.dst + c, dw, sizeof(float) * m, sizeof(float) * m * w));
     }
     file.setFrameBuffer(fb);
     file.readPixels(dw.min.y, dw.max.y);

@@ -1,13 +1,13 @@
 // exr_output.cpp: see exr_output.h.
 #include "io/exr_output.h"
 
+#include <Imath/half.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
 #include <cstring>
 #include <filesystem>
-#include <Imath/half.h>
 #include <nlohmann/json.hpp>
 
 #include "hbil/error.h"
@@ -30,13 +30,15 @@ std::vector<OutputChannel> output_plan(const AoFrame& f, const Params& p) {
   for (const auto& o : p.outputs) {
     if (o == "ao" && f.ao_rgb.empty()) add("ao.Y", f.ao.data(), 1, false);
     if (o == "ao" && !f.ao_rgb.empty())
-      for (int k = 0; k < 3; ++k) add(std::string("ao.") + "RGB"[k], &f.ao_rgb.data()->x + k, 3, false);
+      for (int k = 0; k < 3; ++k)
+        add(std::string("ao.") + "RGB"[k], &f.ao_rgb.data()->x + k, 3, false);
     if (o == "farfield") rgb("farfield", f.farfield);
     if (o == "composite")
       for (int k = 0; k < 4; ++k)
         add(std::string("composite.") + "RGBA"[k], f.composite.data() + k, 4, true);
     if (o == "bentcone") {
-      for (int k = 0; k < 3; ++k) add(std::string("bentcone.") + "XYZ"[k], &f.bent.data()->x + k, 3, false);
+      for (int k = 0; k < 3; ++k)
+        add(std::string("bentcone.") + "XYZ"[k], &f.bent.data()->x + k, 3, false);
       add("bentcone.W", f.cone_cos.data(), 1, false);
     }
     if (o == "irradiance") rgb("irradiance", f.irradiance);
