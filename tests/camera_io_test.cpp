@@ -356,6 +356,23 @@ INSTANTIATE_TEST_SUITE_P(Cases, CameraBlenderRender,
 // --------------------------------------------------------------------------------------
 // Solver, synthetic
 
+TEST(SolveCamera, SolvesAgainOnlyWhenPositionChanges) {
+  const Camera want = test_camera();
+  std::vector<Vec3> pos = positions_of(want, 1);
+  const Camera a = solve_camera_from_positions(want.width, want.height, pos);
+  const int solves = camera_solves();
+  const Camera b = solve_camera_from_positions(want.width, want.height, pos);
+  EXPECT_EQ(camera_solves(), solves);  // the same positions: the last camera, no solve
+  EXPECT_EQ(a.fx, b.fx);
+  EXPECT_EQ(a.cx, b.cx);
+  EXPECT_EQ(a.t.x, b.t.x);
+  EXPECT_EQ(a.source, b.source);
+  for (Vec3& p : pos) p.x += 0.25f;  // the scene (or camera) moved
+  const Camera c = solve_camera_from_positions(want.width, want.height, pos);
+  EXPECT_EQ(camera_solves(), solves + 1);
+  EXPECT_NE(c.t.x, a.t.x);
+}
+
 TEST(SolveCamera, RecoversKnownCameraNoiseFree) {
   const Camera want = test_camera();
   const Camera got = solve_camera_from_positions(want.width, want.height, positions_of(want, 1));

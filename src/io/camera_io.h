@@ -88,6 +88,10 @@ inline constexpr int kSolveMinPixels = 100;
 // from 20000 differ by < 0.01 px in reprojection (tests/camera_io_test.cpp), at a tenth of
 // the time.
 inline constexpr int kSolveMaxPixels = 20000;
+// A frame whose sampled positions equal the last solved frame's bit for bit gets that camera
+// again without a solve (the solve is deterministic).
 Camera solve_camera_from_positions(int width, int height, const std::vector<Vec3>& positions);
+// Solves actually run in this process (for tests of the reuse above).
+int camera_solves();
 
 }  // namespace hbil::io
