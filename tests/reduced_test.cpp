@@ -152,6 +152,26 @@ TEST(ReducedSearch, GrooveKeepsTheClosedForm) {
   EXPECT_GT(checked, 100);
 }
 
+TEST(ReducedSearch, FramesSmallerThanTheScaleGiveFiniteResults) {
+  for (const auto& [w, h] : std::vector<std::pair<int, int>>{{1, 1}, {2, 3}, {5, 3}, {9, 7}})
+    for (int n = 1; n <= 8; ++n) {
+      const Camera cam = test::look_at(w, h, 60, {0.4, 2.0, 1.5}, {0, 0, 0.2});
+      GBuffer g = test::ray_cast(cam, test::v_groove(75 * kPi / 180));
+      g.diffcol.assign(g.pixels(), Vec3{0.5f, 0.5f, 0.5f});
+      g.diffdir.assign(g.pixels(), Vec3{1, 1, 1});
+      Params p;
+      p.search_scale = n;
+      p.outputs = {"ao", "bentcone", "irradiance"};
+      const AoFrame f = compute_ao_frame(g, cam, p);
+      ASSERT_EQ(f.ao.size(), g.pixels());
+      for (size_t i = 0; i < g.pixels(); ++i) {
+        EXPECT_TRUE(f.ao[i] >= 0.f && f.ao[i] <= 1.f) << w << "x" << h << " n=" << n;
+        EXPECT_TRUE(std::isfinite(f.irradiance[i].x)) << w << "x" << h << " n=" << n;
+        EXPECT_TRUE(std::isfinite(f.bent[i].x) && std::isfinite(f.cone_cos[i]));
+      }
+    }
+}
+
 TEST(ReducedSearch, IdenticalBytesForAnyThreadCount) {
   const Camera cam = test::look_at(131, 77, 60, {0.4, 2.0, 1.5}, {0, 0, 0.2});
   std::vector<test::HalfPlane> planes = test::v_groove(75 * kPi / 180);
