@@ -92,6 +92,11 @@ AoFrame TemporalChain::process(const GBuffer& g, const Camera& cam, int frame, b
   }
   rep.cut = cut && !rep.first;
   if (rep.first) rep.cut_reason.clear();
+  // The previous frame's history and view were only needed for the reprojection: released
+  // now, so that they do not take memory through the search (they are replaced at the end).
+  std::vector<float>().swap(data_);
+  view_ = ViewGBuffer{};
+  if (!history) r = Reprojected{};
 
   // Feedback: the history's irradiance, with its holes filled by push/pull.
   const bool gather = gathers(p_);
@@ -119,8 +124,11 @@ AoFrame TemporalChain::process(const GBuffer& g, const Camera& cam, int frame, b
   in.feedback = feedback.empty() ? nullptr : &feedback;
   HorizonImage h = search_frame(v, g, cam, p_, in);
 
-  // Accumulation with the history; the result becomes the next frame's history.
-  std::vector<float> next(kChannels * n_px, 0.f);
+  // Accumulation with the history; the result becomes the next frame's history. It is
+  // written over the reprojected history in place (each pixel reads its history before it
+  // writes; background and rejected pixels hold 0 there, as a fresh buffer would).
+  std::vector<float> next =
+      history ? std::move(r.value) : std::vector<float>(kChannels * n_px, 0.f);
   const bool has_e = !h.irradiance.empty();
   tbb::parallel_for(0, v.height, [&](int y) {
     for (int x = 0; x < v.width; ++x) {
@@ -128,7 +136,7 @@ AoFrame TemporalChain::process(const GBuffer& g, const Camera& cam, int frame, b
       if (v.is_background(i)) continue;
       float n = 1;
       if (history && r.valid[i]) {
-        const float* hv = &r.value[kChannels * i];
+        const float* hv = &next[kChannels * i];
         n = std::min(hv[8] + 1.f, float(p_.history_max));
         const float a = std::max(1.f / n, 1.f - float(p_.history_weight));
         auto mix = [a](float old, float cur) { return old + a * (cur - old); };
