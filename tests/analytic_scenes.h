@@ -84,4 +84,13 @@ inline std::vector<HalfPlane> v_groove(double gamma,
            length_b}};
 }
 
+// A V-groove of 75 degrees with a slanted occluder, seen at an odd resolution (partial 4x4
+// blocks): the scene of the thread-determinism tests.
+inline GBuffer busy_scene(Camera& cam) {
+  cam = look_at(131, 77, 60, {0.4, 2.0, 1.5}, {0, 0, 0.2});
+  std::vector<HalfPlane> planes = v_groove(75 * M_PI / 180);
+  planes.push_back({{0.3, 0.5, 0.1}, {0.6, 0.0, 0.8}, {0, 0, 1}});  // a slanted occluder
+  return ray_cast(cam, planes);
+}
+
 }  // namespace hbil::test

@@ -160,12 +160,7 @@ TEST(HorizonSearch, HundredTwentyDegreeGrooveMatchesClosedForm) {
   check_groove(120);
 }
 
-GBuffer busy_scene(Camera& cam) {
-  cam = test::look_at(131, 77, 60, {0.4, 2.0, 1.5}, {0, 0, 0.2});  // odd sizes: partial 4x4 blocks
-  std::vector<test::HalfPlane> planes = test::v_groove(75 * kPi / 180);
-  planes.push_back({{0.3, 0.5, 0.1}, {0.6, 0.0, 0.8}, {0, 0, 1}});  // a slanted occluder
-  return test::ray_cast(cam, planes);
-}
+using test::busy_scene;
 
 TEST(Interleave, DeinterleavedBuffersMatchStridedReadInPlace) {
   Camera cam;

@@ -173,10 +173,8 @@ TEST(ReducedSearch, FramesSmallerThanTheScaleGiveFiniteResults) {
 }
 
 TEST(ReducedSearch, IdenticalBytesForAnyThreadCount) {
-  const Camera cam = test::look_at(131, 77, 60, {0.4, 2.0, 1.5}, {0, 0, 0.2});
-  std::vector<test::HalfPlane> planes = test::v_groove(75 * kPi / 180);
-  planes.push_back({{0.3, 0.5, 0.1}, {0.6, 0.0, 0.8}, {0, 0, 1}});
-  GBuffer g = test::ray_cast(cam, planes);
+  Camera cam;
+  GBuffer g = test::busy_scene(cam);
   g.diffcol.assign(g.pixels(), Vec3{0.8f, 0.5f, 0.2f});
   g.diffdir.assign(g.pixels(), Vec3{1, 1, 1});
   Params p;

@@ -24,14 +24,12 @@ std::vector<OutputChannel> output_plan(const AoFrame& f, const Params& p) {
   auto add = [&](const std::string& name, const float* src, size_t stride, bool colour) {
     plan.push_back({name, src, stride, colour && p.colour_half});
   };
-  auto rgb = [&](const std::string& layer, const std::vector<Vec3>& v) {
-    for (int k = 0; k < 3; ++k) add(layer + "." + "RGB"[k], &v.data()->x + k, 3, true);
+  auto rgb = [&](const std::string& layer, const std::vector<Vec3>& v, bool colour = true) {
+    for (int k = 0; k < 3; ++k) add(layer + "." + "RGB"[k], &v.data()->x + k, 3, colour);
   };
   for (const auto& o : p.outputs) {
     if (o == "ao" && f.ao_rgb.empty()) add("ao.Y", f.ao.data(), 1, false);
-    if (o == "ao" && !f.ao_rgb.empty())
-      for (int k = 0; k < 3; ++k)
-        add(std::string("ao.") + "RGB"[k], &f.ao_rgb.data()->x + k, 3, false);
+    if (o == "ao" && !f.ao_rgb.empty()) rgb("ao", f.ao_rgb, false);
     if (o == "farfield") rgb("farfield", f.farfield);
     if (o == "composite")
       for (int k = 0; k < 4; ++k)
