@@ -1,0 +1,202 @@
+// exr_deflate.cpp: see exr_deflate.h.
+#include "io/exr_deflate.h"
+
+#include <Imath/half.h>
+#include <OpenEXR/ImfChannelList.h>
+#include <OpenEXR/ImfHeader.h>
+#include <OpenEXR/ImfPartType.h>
+#include <libdeflate.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <cstdint>
+#include <cstring>
+#include <memory>
+#include <mutex>
+#include <stdexcept>
+#ifdef __SSE2__
+#include <emmintrin.h>
+#endif
+
+namespace hbil::io {
+
+namespace {
+
+static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__,
+              "OpenEXR stores samples little-endian; this reader copies them as they are");
+
+// Where a wanted channel lies in one decoded scanline.
+struct Plan {
+  size_t offset;  // bytes from the start of the scanline (always even: samples are 2 or 4 B)
+  Imf::PixelType type;
+  const ExrChannelTarget* target;
+};
+
+// A block's bytes, either as stored or (ZIP) as the two halves the format interleaves: byte
+// j of the scanline data is lo[j / 2] for even j and hi[j / 2] for odd j.
+struct Bytes {
+  const unsigned char* lo;
+  const unsigned char* hi;
+  bool split;
+  uint32_t sample(size_t j, int size) const {  // the little-endian sample at byte j
+    unsigned char b[4];
+    if (split)
+      for (int k = 0; k < size; ++k) b[k] = (k & 1 ? hi : lo)[(j + k) / 2];
+    else
+      std::memcpy(b, lo + j, size_t(size));
+    return size == 2
+               ? uint32_t(b[0]) | uint32_t(b[1]) << 8
+               : uint32_t(b[0]) | uint32_t(b[1]) << 8 | uint32_t(b[2]) << 16 | uint32_t(b[3]) << 24;
+  }
+};
+
+float to_float(uint32_t bits, Imf::PixelType type) {
+  switch (type) {
+    case Imf::HALF: {
+      Imath::half h;
+      h.setBits(uint16_t(bits));
+      return float(h);
+    }
+    case Imf::FLOAT: {
+      float f;
+      std::memcpy(&f, &bits, 4);
+      return f;
+    }
+    default:
+      return float(bits);  // UINT, as OpenEXR converts it
+  }
+}
+
+// Converts the wanted channels of the rows [row0, row0 + rows) of one block.
+void convert(const Bytes& bytes, size_t line_bytes, size_t width, size_t row0, size_t rows,
+             const std::vector<Plan>& plans) {
+  for (size_t r = 0; r < rows; ++r)
+    for (const Plan& p : plans) {
+      const int size = p.type == Imf::HALF ? 2 : 4;
+      const size_t j0 = r * line_bytes + p.offset;
+      float* out = p.target->dst + (row0 + r) * width * p.target->stride;
+      const size_t stride = p.target->stride;
+      if (bytes.split && p.type == Imf::HALF) {  // the common case, unrolled
+        const unsigned char* lo = bytes.lo + j0 / 2;
+        const unsigned char* hi = bytes.hi + j0 / 2;
+        for (size_t x = 0; x < width; ++x) {
+          Imath::half h;
+          h.setBits(uint16_t(lo[x] | hi[x] << 8));
+          out[x * stride] = float(h);
+        }
+      } else {
+        for (size_t x = 0; x < width; ++x)
+          out[x * stride] = to_float(bytes.sample(j0 + x * size, size), p.type);
+      }
+    }
+}
+
+// Undoes ZIP's predictor: byte i was stored as t[i] - t[i - 1] + 128 (mod 256), so the data
+// is the running sum of (stored - 128). With SSE2, 16 bytes at a time: a prefix sum within
+// the register in four shifted adds, plus the previous register's last byte.
+void undo_predictor(unsigned char* t, size_t n) {
+  if (n == 0) return;
+  size_t i = 1;
+#ifdef __SSE2__
+  __m128i carry = _mm_set1_epi8(char(t[0]));
+  const __m128i bias = _mm_set1_epi8(char(0x80));
+  for (; i + 16 <= n; i += 16) {
+    __m128i v = _mm_xor_si128(_mm_loadu_si128(reinterpret_cast<const __m128i*>(t + i)), bias);
+    v = _mm_add_epi8(v, _mm_slli_si128(v, 1));
+    v = _mm_add_epi8(v, _mm_slli_si128(v, 2));
+    v = _mm_add_epi8(v, _mm_slli_si128(v, 4));
+    v = _mm_add_epi8(v, _mm_slli_si128(v, 8));
+    v = _mm_add_epi8(v, carry);
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(t + i), v);
+    __m128i last = _mm_srli_epi16(v, 8);     // byte 15, as the low byte of word 7
+    last = _mm_shufflehi_epi16(last, 0xff);  // word 7 in all of the high half
+    last = _mm_unpackhi_epi64(last, last);   // and in the low half
+    carry = _mm_or_si128(last, _mm_slli_epi16(last, 8));
+  }
+#endif
+  for (; i < n; ++i) t[i] = (unsigned char)(t[i - 1] + t[i] - 128);
+}
+
+struct Inflater {
+  libdeflate_decompressor* d = libdeflate_alloc_decompressor();
+  ~Inflater() { libdeflate_free_decompressor(d); }
+};
+
+}  // namespace
+
+bool read_deflate_scanlines(Imf::InputFile& file, const std::vector<ExrChannelTarget>& targets) {
+  const Imf::Header& header = file.header();
+  if (header.hasTileDescription() || (header.hasType() && header.type() != Imf::SCANLINEIMAGE))
+    return false;
+  size_t block_rows;
+  switch (header.compression()) {
+    case Imf::ZIP_COMPRESSION:
+      block_rows = 16;
+      break;
+    case Imf::ZIPS_COMPRESSION:
+    case Imf::NO_COMPRESSION:
+      block_rows = 1;
+      break;
+    default:
+      return false;
+  }
+  const bool zipped = header.compression() != Imf::NO_COMPRESSION;
+  const Imath::Box2i dw = header.dataWindow();
+  const size_t width = size_t(int64_t(dw.max.x) - dw.min.x + 1);
+  const size_t height = size_t(int64_t(dw.max.y) - dw.min.y + 1);
+
+  std::vector<Plan> plans;
+  size_t line_bytes = 0;
+  for (auto c = header.channels().begin(); c != header.channels().end(); ++c) {
+    const Imf::Channel& ch = c.channel();
+    if (ch.xSampling != 1 || ch.ySampling != 1) return false;
+    if (ch.type != Imf::HALF && ch.type != Imf::FLOAT && ch.type != Imf::UINT) return false;
+    for (const ExrChannelTarget& t : targets)
+      if (t.name == c.name()) plans.push_back({line_bytes, ch.type, &t});
+    line_bytes += width * (ch.type == Imf::HALF ? 2 : 4);
+  }
+  if (plans.size() != targets.size()) return false;
+
+  const size_t blocks = (height + block_rows - 1) / block_rows;
+  std::mutex fetching;  // rawPixelData returns OpenEXR's own buffer: one block at a time
+  tbb::parallel_for(
+      tbb::blocked_range<size_t>(0, blocks, block_rows == 1 ? 16 : 1),
+      [&](const tbb::blocked_range<size_t>& range) {
+        Inflater inflater;
+        std::vector<unsigned char> stored, inflated;
+        for (size_t b = range.begin(); b != range.end(); ++b) {
+          const size_t row0 = b * block_rows, rows = std::min(block_rows, height - row0);
+          const int y0 = int(int64_t(dw.min.y) + int64_t(row0));
+          const size_t expected = rows * line_bytes;
+          {
+            std::lock_guard<std::mutex> lock(fetching);
+            const char* data;
+            int size;
+            file.rawPixelData(y0, data, size);
+            stored.assign(data, data + size);
+          }
+          auto damaged = [&](const char* why) {
+            return std::runtime_error("the block at rows " + std::to_string(y0) + "-" +
+                                      std::to_string(y0 + int(rows) - 1) + " " + why);
+          };
+          Bytes bytes{stored.data(), nullptr, false};
+          // A block that did not shrink is stored as it is (OpenEXR writes the smaller form).
+          if (stored.size() != expected) {
+            if (!zipped) throw damaged("has the wrong size");
+            inflated.resize(expected);
+            size_t got = 0;
+            if (libdeflate_zlib_decompress(inflater.d, stored.data(), stored.size(),
+                                           inflated.data(), expected, &got) != LIBDEFLATE_SUCCESS ||
+                got != expected)
+              throw damaged("is damaged: its ZIP data does not inflate to the block's size");
+            unsigned char* t = inflated.data();
+            undo_predictor(t, expected);
+            bytes = Bytes{t, t + (expected + 1) / 2, true};
+          }
+          convert(bytes, line_bytes, width, row0, rows, plans);
+        }
+      });
+  return true;
+}
+
+}  // namespace hbil::io
