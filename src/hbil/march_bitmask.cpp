@@ -118,8 +118,8 @@ PixelSums march_bitmask_pixel(const SampleView& view, int i, int j, const Vec3& 
         }
         const float th_lo = angle_of_key(side == 0 ? key_hi : key_lo);
         const float th_hi = angle_of_key(side == 0 ? key_lo : key_hi);
-        const float lo = (th_lo - sector0) / kSectorWidth;
-        const float hi = (th_hi - sector0) / kSectorWidth;
+        const float lo = (th_lo - sector0) * kInvSectorWidth;
+        const float hi = (th_hi - sector0) * kInvSectorWidth;
         // "Round" criterion: a sector counts when at least half covered.
         const int a = std::clamp(int(std::floor(lo + 0.5f)), 0, kSectors);
         const int b = std::clamp(int(std::floor(hi + 0.5f)), 0, kSectors);
@@ -135,7 +135,7 @@ PixelSums march_bitmask_pixel(const SampleView& view, int i, int j, const Vec3& 
             const int q = std::countr_zero(fresh);
             w += bound[q + 1].ao - bound[q].ao;
           }
-          const float fw = facing_weight(n_s, st.d3 / std::sqrt(st.dist2));
+          const float fw = facing_weight(dot(n_s, st.d3) / std::sqrt(st.dist2));
           irradiance += view.radiance[st.k_s] * fw * w;
           if (log) log->entries.push_back({std::uint32_t(st.k_s), fw, w});
         }

@@ -310,9 +310,9 @@ void MarchBitmaskRow(const SampleView& view, int i0, int j, int count, const flo
           }
           const VF th_lo = angle_of_key(side == 0 ? key_hi : key_lo);
           const VF th_hi = angle_of_key(side == 0 ? key_lo : key_hi);
-          const VF width = hn::Set(d, kSectorWidth);
-          const VI a = SectorIndex(d, hn::Div(hn::Sub(th_lo, sector0), width));
-          const VI b = SectorIndex(d, hn::Div(hn::Sub(th_hi, sector0), width));
+          const VF inv_width = hn::Set(d, kInvSectorWidth);
+          const VI a = SectorIndex(d, hn::Mul(hn::Sub(th_lo, sector0), inv_width));
+          const VI b = SectorIndex(d, hn::Mul(hn::Sub(th_hi, sector0), inv_width));
           m = hn::And(m, hn::RebindMask(d, hn::Gt(b, a)));
           if (hn::AllFalse(d, m)) continue;
           const VI span = hn::Sub(b, a);
@@ -343,10 +343,9 @@ void MarchBitmaskRow(const SampleView& view, int i0, int j, int count, const flo
             w = hn::Add(w, hn::IfThenElseZero(hn::RebindMask(d, has), wq));
             fresh = hn::And(fresh, hn::Sub(fresh, hn::Set(du, 1u)));
           }
-          // view.radiance[k_s] * facing_weight(n_s, d3 / dist) * w
+          // view.radiance[k_s] * facing_weight(n_s·d3 / dist) * w
           const VF dist = hn::Sqrt(dist2);
-          const V3 wi{hn::Div(d3.x, dist), hn::Div(d3.y, dist), hn::Div(d3.z, dist)};
-          VF x = hn::Div(hn::Add(hn::Neg(Dot(n_s, wi)), hn::Set(d, 0.1f)), hn::Set(d, 0.2f));
+          VF x = hn::Mul(hn::Sub(hn::Set(d, 0.1f), hn::Div(Dot(n_s, d3), dist)), hn::Set(d, 5.f));
           x = Clamp(x, zero, one);
           const VF fw =
               hn::Mul(hn::Mul(x, x), hn::Sub(hn::Set(d, 3.f), hn::Mul(hn::Set(d, 2.f), x)));

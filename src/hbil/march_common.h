@@ -34,6 +34,7 @@ inline float fast_acos(float x) {
 // The bitmask's sectors over the slice's visible half circle.
 constexpr int kSectors = 32;
 constexpr float kSectorWidth = kPi / kSectors;
+constexpr float kInvSectorWidth = 1.f / kSectorWidth;  // a multiply where a divide would cost
 
 // ∫_0^θ f(ω'(θ))|sin θ| dθ of the four slice integrands at one angle (see integrate_slice),
 // with s, c = sin θ, cos θ.
@@ -48,9 +49,10 @@ inline Antiderivative antiderivative(float t, float s, float c, float nx, float 
 // HBIL §3.4 rejection filter: a neighbour whose normal n' faces away from the receiver
 // (−n'·ω_i < 0, ω_i from receiver to neighbour) occludes but sends no light. The fade
 // smoothstep(−0.1, 0.1, −n'·ω_i) accepts neighbours seen at up to ~84 degrees from their
-// normal fully and rejects those facing away by more than ~96 degrees.
-inline float facing_weight(const Vec3& n_s, const Vec3& w_i) {
-  const float x = std::clamp((-dot(n_s, w_i) + 0.1f) / 0.2f, 0.f, 1.f);
+// normal fully and rejects those facing away by more than ~96 degrees. Takes n'·ω_i, which
+// the marches form as n'·(X − P) / |X − P| (one divide, not three).
+inline float facing_weight(float n_dot_wi) {
+  const float x = std::clamp((0.1f - n_dot_wi) * 5.f, 0.f, 1.f);
   return x * x * (3.f - 2.f * x);
 }
 

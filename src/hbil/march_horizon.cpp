@@ -51,7 +51,8 @@ PixelSums march_horizon_pixel(const SampleView& view, int i, int j, const Vec3& 
         float lo, hi;
         if (in_ao) rise(theta0, theta1, lo, hi);
         if (m.gather && rise(theta0_g, theta1_g, lo, hi))
-          irradiance += view.radiance[st.k_s] * facing_weight(view.normal[st.k_s], st.d3 / dist) *
+          irradiance += view.radiance[st.k_s] *
+                        facing_weight(dot(view.normal[st.k_s], st.d3) / dist) *
                         (G(hi).ao - G(lo).ao);
       }
     }
