@@ -111,6 +111,9 @@ Reprojected reproject_gather(const ViewGBuffer& prev, const Camera& prev_cam,
   Reprojected r = empty_result(cur, channels);
   if (prev.pixels() == 0 || cur.pixels() == 0) return r;
 
+  // The current view space to the previous one in one rigid motion: v' = M v + m.
+  const Mat3d M = prev_cam.R * cur_cam.R.transposed();
+  const Vec3d m = prev_cam.t - M * cur_cam.t;
   tbb::parallel_for(0, cur.height, [&](int y) {
     std::vector<double> acc(static_cast<size_t>(channels));
     for (int x = 0; x < cur.width; ++x) {
@@ -129,8 +132,8 @@ Reprojected reproject_gather(const ViewGBuffer& prev, const Camera& prev_cam,
       const double max_dist = double(tol.depth) * zc;
       // The pixel's point and normal in the previous frame's view space, once, so that the four
       // neighbours are compared where they are stored (distances and angles are the same).
-      const Vec3d pp = prev_cam.world_to_view(cur_cam.view_to_world(Vec3d(cur.position[i])));
-      const Vec3d np = prev_cam.world_dir_to_view(cur_cam.view_dir_to_world(Vec3d(cur.normal[i])));
+      const Vec3d pp = M * Vec3d(cur.position[i]) + m;
+      const Vec3d np = M * Vec3d(cur.normal[i]);
       std::fill(acc.begin(), acc.end(), 0.0);
       double wsum = 0;
       for (int k = 0; k < 4; ++k) {
