@@ -11,8 +11,8 @@
 
 #include <cstdint>
 #include <cstring>
-#include <memory>
 #include <mutex>
+#include <new>
 #include <stdexcept>
 #ifdef __SSE2__
 #include <emmintrin.h>
@@ -119,7 +119,12 @@ void undo_predictor(unsigned char* t, size_t n) {
 
 struct Inflater {
   libdeflate_decompressor* d = libdeflate_alloc_decompressor();
+  Inflater() {
+    if (!d) throw std::bad_alloc();
+  }
   ~Inflater() { libdeflate_free_decompressor(d); }
+  Inflater(const Inflater&) = delete;
+  Inflater& operator=(const Inflater&) = delete;
 };
 
 }  // namespace
