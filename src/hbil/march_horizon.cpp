@@ -20,11 +20,17 @@ PixelSums march_horizon_pixel(const SampleView& view, int i, int j, const Vec3& 
     SliceLine L;
     if (!slice_line(f, n, std::cos(phi[s]), std::sin(phi[s]), c, L)) continue;
     const float gamma = std::atan2(L.nx, L.ny);  // angle of n' from ω_o
-    auto G = [&](float t) { return antiderivative(t, std::sin(t), std::cos(t), L.nx, L.ny); };
+    // A horizon angle with its sine and cosine: a sample's angle comes from its cosine, so the
+    // band it sweeps is weighted (eq. 18) without a sine or cosine per sample.
+    struct Angle {
+      float t, s, c;
+    };
+    auto G = [&](const Angle& a) { return antiderivative(a.t, a.s, a.c, L.nx, L.ny); };
+    auto angle = [](float t) { return Angle{t, std::sin(t), std::cos(t)}; };
     // The current horizons, starting at the tangent plane (§2.1); those of the gather (g)
     // see the samples up to the gather radius.
     float theta1 = std::min(gamma + 0.5f * kPi, kPi), theta0 = std::max(gamma - 0.5f * kPi, -kPi);
-    float theta1_g = theta1, theta0_g = theta0;
+    Angle h1_g = angle(theta1), h0_g = angle(theta0);
     Vec3 irradiance;
     for (int side = 0; side < 2; ++side) {
       const float sx = side == 0 ? L.dx : -L.dx, sy = side == 0 ? L.dy : -L.dy;
@@ -36,24 +42,23 @@ PixelSums march_horizon_pixel(const SampleView& view, int i, int j, const Vec3& 
         if (r == StepResult::skip) continue;
         const bool in_ao = k < c.steps && st.dist2 < m.r2;
         const float dist = std::sqrt(st.dist2);
-        const float theta_f = sign * std::acos(std::clamp(dot(st.d3, f.wo) / dist, -1.f, 1.f));
+        const float cos_f = std::clamp(dot(st.d3, f.wo) / dist, -1.f, 1.f);
+        const float theta_f = sign * fast_acos(cos_f);  // as the bitmask march: within 7e-5 rad
         // A rise of the horizon occludes, and is lit by, the band it sweeps (eq. 18).
-        auto rise = [&](float& t0, float& t1, float& lo, float& hi) {
-          if (side == 0) {
-            if (!(theta_f < t1)) return false;
-            lo = theta_f, hi = t1, t1 = theta_f;
-          } else {
-            if (!(theta_f > t0)) return false;
-            lo = t0, hi = theta_f, t0 = theta_f;
-          }
-          return true;
-        };
-        float lo, hi;
-        if (in_ao) rise(theta0, theta1, lo, hi);
-        if (m.gather && rise(theta0_g, theta1_g, lo, hi))
-          irradiance += view.radiance[st.k_s] *
-                        facing_weight(dot(view.normal[st.k_s], st.d3) / dist) *
-                        (G(hi).ao - G(lo).ao);
+        if (in_ao) {
+          if (side == 0)
+            theta1 = std::min(theta1, theta_f);
+          else
+            theta0 = std::max(theta0, theta_f);
+        }
+        if (!m.gather) continue;
+        Angle& h = side == 0 ? h1_g : h0_g;
+        if (side == 0 ? !(theta_f < h.t) : !(theta_f > h.t)) continue;
+        const Angle a{theta_f, sign * std::sqrt(std::max(0.f, 1.f - cos_f * cos_f)), cos_f};
+        const float w = side == 0 ? G(h).ao - G(a).ao : G(a).ao - G(h).ao;
+        h = a;
+        irradiance +=
+            view.radiance[st.k_s] * facing_weight(dot(view.normal[st.k_s], st.d3) / dist) * w;
       }
     }
     theta1 = std::max(theta1, theta0);
