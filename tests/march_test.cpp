@@ -1,9 +1,9 @@
-// march_test.cpp: the vectorised bitmask march against its scalar reference.
+// march_test.cpp: the vectorised marches (bitmask and horizon) against their scalar references.
 //
-// march_bitmask_simd.cpp promises the scalar results to the bit (same arithmetic in the same
-// order, lane by lane), so the tolerance here is zero: every float of ao, vis, the bent
-// vector and the irradiance must be identical, on analytic scenes with odd sizes (partial
-// vectors at the end of a row), with constant and measured thickness, with and without a
+// march_bitmask_simd.cpp and march_horizon_simd.cpp promise the scalar results to the bit (same
+// arithmetic in the same order, lane by lane), so the tolerance here is zero: every float of ao,
+// vis, the bent vector and the irradiance must be identical, on analytic scenes with odd sizes
+// (partial vectors at the end of a row), with constant and measured thickness, with and without a
 // radiance source, interleaved and full resolution, and on a Blender sample.
 #include "hbil/march.h"
 
@@ -13,6 +13,7 @@
 #include <cstring>
 #include <iostream>
 #include <numbers>
+#include <string>
 
 #include "analytic_scenes.h"
 #include "hbil/interleave.h"
@@ -44,23 +45,25 @@ void expect_identical(const HorizonImage& a, const HorizonImage& b) {
 // Both kernels over a view, interleaved and full, with the given radiance (or none).
 void compare_kernels(const ViewGBuffer& v, HorizonConfig c, const std::vector<Vec3>* radiance,
                      int slices) {
-  c.bitmask = true;
-  for (bool interleave : {true, false}) {
-    SCOPED_TRACE(interleave ? "interleaved" : "full resolution");
-    HorizonConfig scalar = c, simd = c;
-    scalar.vectorised = false;
-    simd.vectorised = true;
-    auto run = [&](const HorizonConfig& k) {
-      return interleave ? horizon_interleaved(v, k, slices, radiance)
-                        : horizon_full(v, k, slices, radiance);
-    };
-    const HorizonImage a = run(scalar), b = run(simd);
-    expect_identical(a, b);
-    // The comparison must be able to fail: the scene is occluded somewhere.
-    double mean = 0;
-    for (float x : a.ao) mean += x;
-    EXPECT_LT(mean / double(a.ao.size()), 0.99);
-  }
+  for (bool bitmask : {true, false})
+    for (bool interleave : {true, false}) {
+      SCOPED_TRACE(std::string(bitmask ? "bitmask, " : "horizon, ") +
+                   (interleave ? "interleaved" : "full resolution"));
+      c.bitmask = bitmask;
+      HorizonConfig scalar = c, simd = c;
+      scalar.vectorised = false;
+      simd.vectorised = true;
+      auto run = [&](const HorizonConfig& k) {
+        return interleave ? horizon_interleaved(v, k, slices, radiance)
+                          : horizon_full(v, k, slices, radiance);
+      };
+      const HorizonImage a = run(scalar), b = run(simd);
+      expect_identical(a, b);
+      // The comparison must be able to fail: the scene is occluded somewhere.
+      double mean = 0;
+      for (float x : a.ao) mean += x;
+      EXPECT_LT(mean / double(a.ao.size()), 0.99);
+    }
 }
 
 GBuffer groove_scene(Camera& cam, int w, int h) {

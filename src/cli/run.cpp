@@ -172,11 +172,11 @@ void run(const RunOptions& o) {
                   ? " (no back-face channel " + p.passes.at("backdepth").dump() + ")"
                   : std::string(" (passes.backdepth is off)"));
       std::cerr << s.str() << "\n";
-      std::cerr << "hbil: march: "
-                << (p.vectorised ? std::string("SIMD, ") + march_simd_target()
-                                 : std::string("scalar reference"))
-                << "\n";
     }
+    std::cerr << "hbil: march: " << p.method << ", "
+              << (p.vectorised ? std::string("SIMD, ") + march_simd_target()
+                               : std::string("scalar reference"))
+              << "\n";
     std::cerr << "hbil: search: " << describe_search(p, first.spec.width, first.spec.height)
               << "\n";
   }

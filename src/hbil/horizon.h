@@ -62,7 +62,7 @@ struct HorizonConfig {
   // Temporal chain (HBIL §3.3 with accumulation): every slice angle turns by `rotation`
   // (radians) and every step jitter shifts by `jitter_shift` (mod 1), both from the frame.
   float rotation = 0, jitter_shift = 0;
-  bool vectorised = true;  // bitmask: march_bitmask_row (SIMD) instead of march_pixel
+  bool vectorised = true;  // march_row (SIMD, either method) instead of march_pixel
 };
 // The rotation and jitter shift of frame `frame` for `directions` evenly spaced slice
 // directions per block: a van der Corput fraction of the spacing π/directions, and the

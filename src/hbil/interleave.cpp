@@ -66,11 +66,10 @@ HorizonImage horizon_full(const ViewGBuffer& g, const HorizonConfig& c, int slic
                         g.scale,
                         radiance ? radiance->data() : nullptr,
                         g.thickness.empty() ? nullptr : g.thickness.data()};
-  const bool simd = c.bitmask && c.vectorised;
   tbb::parallel_for(0, g.height, [&](int y) {
-    if (simd) {
+    if (c.vectorised) {
       std::vector<PixelSums> row(g.width);
-      march_bitmask_row(view, 0, y, g.width, phi.data(), slices, fraction.data(), c, row.data());
+      march_row(view, 0, y, g.width, phi.data(), slices, fraction.data(), c, row.data());
       for (int x = 0; x < g.width; ++x) {
         const size_t i = size_t(y) * g.width + x;
         if (!g.is_background(i)) store(out, i, row[x], slices);
@@ -160,7 +159,6 @@ HorizonImage horizon_interleaved(const ViewGBuffer& g, const HorizonConfig& c, i
   std::vector<std::pair<int, int>> tasks;  // (phase, row)
   for (int phase = 0; phase < 16; ++phase)
     for (int j = 0; j < subs[phase].h; ++j) tasks.emplace_back(phase, j), ++rows;
-  const bool simd = c.bitmask && c.vectorised;
   if (record && !replay) record->rows.assign(rows, GatherLog{});
   tbb::parallel_for(0, rows, [&](int task) {
     const auto [phase, j] = tasks[task];
@@ -177,10 +175,9 @@ HorizonImage horizon_interleaved(const ViewGBuffer& g, const HorizonConfig& c, i
       return;
     }
     GatherLog* log = record ? &record->rows[task] : nullptr;
-    if (simd) {
+    if (c.vectorised) {
       std::vector<PixelSums> row(s.w);
-      march_bitmask_row(s.view, 0, j, s.w, s.phi.data(), slices, s.fraction.data(), c, row.data(),
-                        log);
+      march_row(s.view, 0, j, s.w, s.phi.data(), slices, s.fraction.data(), c, row.data(), log);
       for (int i = 0; i < s.w; ++i) {
         const size_t dst = size_t(4 * j + s.oy) * g.width + (4 * i + s.ox);
         if (!g.is_background(dst)) store(out, dst, row[i], slices);

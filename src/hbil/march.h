@@ -3,9 +3,10 @@
 // march_horizon.cpp: two horizons per slice (HBIL §1.3, §2.1-2.2, eq. 16-18).
 // march_bitmask.cpp: the visibility bitmask (Therrien et al. 2023) with measured or constant
 //   thickness; the scalar reference.
-// march_bitmask_simd.cpp: the same bitmask march for a run of pixels of one row, one pixel
-//   per SIMD lane (Google Highway, the best instruction set chosen at run time). It gives the
-//   scalar reference's results to the bit (tests/march_test.cpp).
+// march_bitmask_simd.cpp, march_horizon_simd.cpp: the same marches for a run of pixels of one
+//   row, one pixel per SIMD lane (Google Highway, the best instruction set chosen at run
+//   time; what they share is in march_simd-inl.h). They give the scalar references' results
+//   to the bit (tests/march_test.cpp).
 // See horizon.h for the paper sections and every departure from them.
 #pragma once
 
@@ -53,7 +54,19 @@ void march_bitmask_row(const SampleView& view, int i0, int j, int count, const f
                        int n_slices, const float* fraction, const HorizonConfig& c, PixelSums* out,
                        GatherLog* log = nullptr);
 
-// The instruction set march_bitmask_row runs with on this machine ("AVX3" = AVX-512,
+// The horizon march of texels (i0 .. i0 + count − 1, j), as march_bitmask_row (no log).
+void march_horizon_row(const SampleView& view, int i0, int j, int count, const float* phi,
+                       int n_slices, const float* fraction, const HorizonConfig& c, PixelSums* out);
+// The row march of c's method; `log` is used by the bitmask only.
+inline void march_row(const SampleView& view, int i0, int j, int count, const float* phi,
+                      int n_slices, const float* fraction, const HorizonConfig& c, PixelSums* out,
+                      GatherLog* log = nullptr) {
+  if (c.bitmask)
+    march_bitmask_row(view, i0, j, count, phi, n_slices, fraction, c, out, log);
+  else
+    march_horizon_row(view, i0, j, count, phi, n_slices, fraction, c, out);
+}
+// The instruction set the row marches run with on this machine ("AVX3" = AVX-512,
 // "AVX2", "SSE4", ...): the best one the processor supports, chosen at run time. Every one
 // gives the same results to the bit.
 const char* march_simd_target();

@@ -25,70 +25,15 @@
 #include <climits>
 #include <cstdint>
 
-#include "hbil/gbuffer.h"
-#include "hbil/march.h"
-#include "hbil/march_common.h"
+#include "hbil/march_simd-inl.h"
 
 HWY_BEFORE_NAMESPACE();
 namespace hbil::HWY_NAMESPACE {
-namespace hn = hwy::HWY_NAMESPACE;
 
 namespace {
 
-using DF = hn::ScalableTag<float>;
-using DI = hn::RebindToSigned<DF>;
-using DU = hn::RebindToUnsigned<DF>;
-using VF = hn::Vec<DF>;
-using VI = hn::Vec<DI>;
-using VU = hn::Vec<DU>;
-using MF = hn::Mask<DF>;
-constexpr size_t kMaxLanes = HWY_MAX_BYTES / sizeof(float);
+using namespace simd;
 
-// The Vec3 of march_common.h, one per lane.
-struct V3 {
-  VF x, y, z;
-};
-HWY_INLINE VF Dot(const V3& a, const V3& b) {
-  return hn::Add(hn::Add(hn::Mul(a.x, b.x), hn::Mul(a.y, b.y)), hn::Mul(a.z, b.z));
-}
-HWY_INLINE V3 Sub3(const V3& a, const V3& b) {
-  return {hn::Sub(a.x, b.x), hn::Sub(a.y, b.y), hn::Sub(a.z, b.z)};
-}
-HWY_INLINE V3 Add3(const V3& a, const V3& b) {
-  return {hn::Add(a.x, b.x), hn::Add(a.y, b.y), hn::Add(a.z, b.z)};
-}
-HWY_INLINE V3 Scale(const V3& a, VF s) {
-  return {hn::Mul(a.x, s), hn::Mul(a.y, s), hn::Mul(a.z, s)};
-}
-HWY_INLINE V3 Select(MF m, const V3& a, const V3& b) {
-  return {hn::IfThenElse(m, a.x, b.x), hn::IfThenElse(m, a.y, b.y), hn::IfThenElse(m, a.z, b.z)};
-}
-HWY_INLINE VF Clamp(VF v, VF lo, VF hi) {
-  // std::clamp(v, lo, hi) = v < lo ? lo : (hi < v ? hi : v)
-  return hn::IfThenElse(hn::Lt(v, lo), lo, hn::IfThenElse(hn::Lt(hi, v), hi, v));
-}
-// march::fast_acos, lane by lane.
-HWY_INLINE VF FastAcos(DF d, VF x) {
-  const VF a = hn::Abs(x);
-  VF p = hn::Sub(hn::Set(d, 0.0742610f), hn::Mul(hn::Set(d, 0.0187293f), a));
-  p = hn::Add(hn::Set(d, -0.2121144f), hn::Mul(a, p));
-  p = hn::Add(hn::Set(d, 1.5707288f), hn::Mul(a, p));
-  const VF r = hn::Mul(hn::Sqrt(hn::Sub(hn::Set(d, 1.f), a)), p);
-  return hn::IfThenElse(hn::Lt(x, hn::Zero(d)), hn::Sub(hn::Set(d, march::kPi), r), r);
-}
-// normalize_or_zero (vecmath.h).
-HWY_INLINE V3 NormalizeOrZero(DF d, const V3& a) {
-  const VF l = hn::Sqrt(Dot(a, a));
-  const MF ok = hn::And(hn::Gt(l, hn::Zero(d)), hn::Lt(l, hn::Set(d, HUGE_VALF)));
-  return {hn::IfThenElseZero(ok, hn::Div(a.x, l)), hn::IfThenElseZero(ok, hn::Div(a.y, l)),
-          hn::IfThenElseZero(ok, hn::Div(a.z, l))};
-}
-HWY_INLINE V3 Gather3(DF d, const Vec3* base, VI idx3) {
-  const float* b = &base->x;
-  const VI one = hn::Set(DI(), 1);
-  return {hn::GatherIndex(d, b, idx3), hn::GatherIndex(d, b + 0, hn::Add(idx3, one)),
-          hn::GatherIndex(d, b, hn::Add(idx3, hn::Add(one, one)))};
-}
 // int(std::floor(v + 0.5f)) clamped to [0, kSectors].
 HWY_INLINE VI SectorIndex(DF d, VF v) {
   const VF f = hn::Floor(hn::Add(v, hn::Set(d, 0.5f)));
@@ -107,13 +52,7 @@ void MarchBitmaskRow(const SampleView& view, int i0, int j, int count, const flo
   const DU du;
   const size_t N = hn::Lanes(d);
   const bool gather = view.radiance != nullptr;
-  const bool far = gather && c.gather_steps > 0;
-  const float r2 = c.radius * c.radius;
-  const float rg2 = far ? c.gather_radius * c.gather_radius : r2;
-  const int n_steps = c.steps + (far ? c.gather_steps : 0);
   const float cd = std::cos(kSectorWidth), sd = std::sin(kSectorWidth);
-  const float focal = 0.5f * (c.fx + c.fy);
-  const float diagonal = std::hypot(float(view.width), float(view.height));
   const VF zero = hn::Zero(d), one = hn::Set(d, 1.f), half = hn::Set(d, 0.5f);
   const VF stride = hn::Set(d, float(view.stride));
   const VF grazing2 = hn::Set(d, kGrazing2);
@@ -142,61 +81,24 @@ void MarchBitmaskRow(const SampleView& view, int i0, int j, int count, const flo
   };
   for (int base = 0; base < count; base += int(N)) {
     for (size_t l = 0; l < N; ++l) lane_entries[l].clear(), lane_counts[l].clear();
-    // Lanes: texels i0 + base + lane of row j; those past the run read the run's first.
-    const VI ii = hn::Add(hn::Set(di, i0 + base), lane);
-    const MF in_run = hn::RebindMask(d, hn::Lt(lane, hn::Set(di, count - base)));
-    const VI i_safe = hn::IfThenElse(hn::RebindMask(di, in_run), ii, hn::Set(di, i0));
-    const VI own = hn::Add(hn::Mul(hn::Set(di, int(view.row)), hn::Set(di, j)),
-                           hn::Mul(i_safe, hn::Set(di, int(view.col))));
-    const VI own3 = hn::Mul(own, hn::Set(di, 3));
-    const V3 P = Gather3(d, view.position, own3);
-    const V3 n = Gather3(d, view.normal, own3);
-    const MF valid = hn::And(in_run, hn::Lt(P.z, hn::Set(d, ViewGBuffer::kBackground)));
-    if (hn::AllFalse(d, valid)) continue;
-
-    // march::pixel_frame.
-    const V3 wo = NormalizeOrZero(d, {hn::Neg(P.x), hn::Neg(P.y), hn::Neg(P.z)});
-    const V3 ray_P = {hn::Div(P.x, P.z), hn::Div(P.y, P.z), hn::Div(P.z, P.z)};
-    const VF pz_stride = hn::Mul(P.z, stride);
-    const VF r_tex =
-        hn::Min(hn::Div(hn::Set(d, c.radius * focal), pz_stride), hn::Set(d, diagonal));
-    const VF rg_tex =
-        far ? hn::Min(hn::Div(hn::Set(d, c.gather_radius * focal), pz_stride), hn::Set(d, diagonal))
-            : r_tex;
-    const V3 e1 =
-        NormalizeOrZero(d, {hn::Sub(one, hn::Mul(wo.x, wo.x)), hn::Sub(zero, hn::Mul(wo.y, wo.x)),
-                            hn::Sub(zero, hn::Mul(wo.z, wo.x))});
-    const V3 e2 = {hn::Sub(hn::Mul(wo.y, e1.z), hn::Mul(wo.z, e1.y)),
-                   hn::Sub(hn::Mul(wo.z, e1.x), hn::Mul(wo.x, e1.z)),
-                   hn::Sub(hn::Mul(wo.x, e1.y), hn::Mul(wo.y, e1.x))};
-    // step_offset's two groups, per lane.
-    const VF near_span = hn::Sub(r_tex, one);
-    const VF far_start = hn::Max(r_tex, one), far_span = hn::Sub(rg_tex, r_tex);
-    auto offset = [&](int q) {
-      const VF fq = hn::Set(d, fraction[q]);
-      return q < c.steps ? hn::Add(one, hn::Mul(near_span, fq))
-                         : hn::Add(far_start, hn::Mul(far_span, fq));
-    };
-    const MF tiny = hn::Lt(r_tex, one);  // the AO radius is under a texel
+    const PixelLanes px = LoadPixels(d, view, i0, j, base, count, c);
+    if (hn::AllFalse(d, px.valid)) continue;
+    const V3 &P = px.P, &wo = px.wo, &ray_P = px.ray_P;
+    const MF valid = px.valid;
+    auto offset = [&](int q) { return StepOffset(d, px, c, fraction, q); };
 
     VF acc_ao = zero, acc_vis = zero;
     V3 acc_b{zero, zero, zero}, acc_e{zero, zero, zero};
     for (int s = 0; s < n_slices; ++s) {
-      // march::slice_line.
-      const VF cphi = hn::Set(d, std::cos(phi[s])), sphi = hn::Set(d, std::sin(phi[s]));
-      const V3 D = Add3(Scale(e1, cphi), Scale(e2, sphi));
-      const VF gx = hn::Mul(hn::Set(d, c.fx), hn::Sub(D.x, hn::Mul(ray_P.x, D.z)));
-      const VF gy = hn::Mul(hn::Set(d, c.fy), hn::Sub(D.y, hn::Mul(ray_P.y, D.z)));
-      const VF gl = hn::Sqrt(hn::Add(hn::Mul(gx, gx), hn::Mul(gy, gy)));
-      const MF live = hn::And(valid, hn::Gt(gl, zero));
+      const SliceLanes L = SliceLine(d, px, c, phi[s]);
+      const MF live = L.live;
       if (log) begin_slice();
       if (hn::AllFalse(d, live)) {
         if (log) end_slice();
         continue;
       }
-      const VF dx = hn::Div(gx, gl), dy = hn::Div(gy, gl);
-      const V3 dv{hn::Div(dx, hn::Set(d, c.fx)), hn::Div(dy, hn::Set(d, c.fy)), zero};
-      const VF nx = Dot(n, D), ny = Dot(n, wo);
+      const V3& D = L.D;
+      const VF &dx = L.dx, &dy = L.dy, &nx = L.nx, &ny = L.ny;
       // γ and the boundary table (march_bitmask.cpp), lane by lane for γ.
       hn::Store(nx, d, lane_x);
       hn::Store(ny, d, lane_y);
@@ -238,42 +140,19 @@ void MarchBitmaskRow(const SampleView& view, int i0, int j, int count, const flo
           return hn::Mul(sign, FastAcos(d, Clamp(cv, hn::Set(d, -1.f), one)));
         };
         auto ray_at = [&](VF o) {  // f.ray_P + L.dv * (sign * o) * float(view.stride)
-          return Add3(ray_P, Scale(Scale(dv, hn::Mul(sign, o)), stride));
+          return Add3(ray_P, Scale(Scale(L.dv, hn::Mul(sign, o)), stride));
         };
         MF alive = live;  // not yet past the screen edge
-        for (int k = 0; k < n_steps && !hn::AllFalse(d, alive); ++k) {
+        for (int k = 0; k < px.n_steps && !hn::AllFalse(d, alive); ++k) {
           const bool near = k < c.steps;
-          MF m = near ? hn::AndNot(tiny, alive) : alive;
-          const VF o = offset(k);
-          const VI oi = hn::ConvertTo(di, hn::Floor(hn::Add(hn::Mul(sx, o), half)));
-          const VI oj = hn::ConvertTo(di, hn::Floor(hn::Add(hn::Mul(sy, o), half)));
-          const MF at_p =
-              hn::RebindMask(d, hn::And(hn::Eq(oi, hn::Zero(di)), hn::Eq(oj, hn::Zero(di))));
-          m = hn::AndNot(at_p, m);
-          const VI si = hn::Add(ii, oi), sj = hn::Add(hn::Set(di, j), oj);
-          const auto off_i =
-              hn::Or(hn::Lt(si, hn::Zero(di)), hn::Gt(si, hn::Set(di, view.width - 1)));
-          const auto off_j =
-              hn::Or(hn::Lt(sj, hn::Zero(di)), hn::Gt(sj, hn::Set(di, view.height - 1)));
-          const MF off = hn::And(m, hn::RebindMask(d, hn::Or(off_i, off_j)));
-          alive = hn::AndNot(off, alive);
-          m = hn::AndNot(off, m);
+          const StepLanes st = TakeStep(d, view, j, k, sx, sy, sign, px, L, c, fraction, alive);
+          MF m = st.m;
           if (hn::AllFalse(d, m)) continue;
-          const VI k_s = hn::IfThenElseZero(hn::RebindMask(di, m),
-                                            hn::Add(hn::Mul(sj, hn::Set(di, int(view.row))),
-                                                    hn::Mul(si, hn::Set(di, int(view.col)))));
-          const VI k3 = hn::Mul(k_s, hn::Set(di, 3));
-          V3 S = Gather3(d, view.position, k3);
-          const V3 n_s = Gather3(d, view.normal, k3);
-          const V3 ray = ray_at(o);
-          const VF denom = Dot(ray, n_s);
-          const MF steep = hn::Gt(hn::Mul(denom, denom), hn::Mul(grazing2, Dot(ray, ray)));
-          S = Select(steep, Scale(ray, hn::Div(Dot(S, n_s), denom)), S);
-          const V3 d3 = Sub3(S, P);
-          const VF dist2 = Dot(d3, d3);
-          m = hn::And(m, hn::And(hn::Lt(dist2, hn::Set(d, rg2)), hn::Gt(dist2, zero)));
-          if (hn::AllFalse(d, m)) continue;
-          const MF in_ao = near ? hn::And(m, hn::Lt(dist2, hn::Set(d, r2))) : none;
+          const VF o = st.o;
+          const VI k_s = st.k_s, k3 = st.k3;
+          const V3 &S = st.S, &n_s = st.n_s, &d3 = st.d3;
+          const VF dist2 = st.dist2;
+          const MF in_ao = near ? hn::And(m, hn::Lt(dist2, hn::Set(d, px.r2))) : none;
           const VF c_f = Dot(d3, wo);
           const VF key_f = hn::Div(hn::Mul(c_f, hn::Abs(c_f)), dist2);
           MF measured = none;
@@ -293,7 +172,7 @@ void MarchBitmaskRow(const SampleView& view, int i0, int j, int count, const flo
           if (!hn::AllFalse(d, measured)) {
             const VF o_prev = k == 0 ? zero : hn::Min(offset(k - 1), o);
             const VF lo_o = hn::Mul(half, hn::Add(o, o_prev));
-            const bool last = k + 1 == (near ? c.steps : n_steps);
+            const bool last = k + 1 == (near ? c.steps : px.n_steps);
             const VF hi_o = last ? hn::Add(o, hn::Mul(half, hn::Sub(o, o_prev)))
                                  : hn::Mul(half, hn::Add(o, hn::Max(offset(k + 1), o)));
             const VF plane = Dot(S, n_s);
@@ -344,11 +223,7 @@ void MarchBitmaskRow(const SampleView& view, int i0, int j, int count, const flo
             fresh = hn::And(fresh, hn::Sub(fresh, hn::Set(du, 1u)));
           }
           // view.radiance[k_s] * facing_weight(n_s·d3 / dist) * w
-          const VF dist = hn::Sqrt(dist2);
-          VF x = hn::Mul(hn::Sub(hn::Set(d, 0.1f), hn::Div(Dot(n_s, d3), dist)), hn::Set(d, 5.f));
-          x = Clamp(x, zero, one);
-          const VF fw =
-              hn::Mul(hn::Mul(x, x), hn::Sub(hn::Set(d, 3.f), hn::Mul(hn::Set(d, 2.f), x)));
+          const VF fw = FacingWeight(d, Dot(n_s, d3), hn::Sqrt(dist2));
           const V3 L = Gather3(d, view.radiance, k3);
           const V3 add = Scale(Scale(L, fw), w);
           irradiance = Select(any_fresh, Add3(irradiance, add), irradiance);

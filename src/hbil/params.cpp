@@ -54,8 +54,8 @@ const std::vector<ParamInfo>& params_table() {
        "after re-interleaving, average each pixel with the 4x4 block around it (depth- and "
        "normal-aware) so that every pixel integrates all 16 x slices directions"},
       {"vectorised", &Params::vectorised, 0, 1, "bool",
-       "method bitmask: march the pixels of a row in SIMD lanes (AVX-512, AVX2, ... chosen at "
-       "run time); false runs the scalar reference, which gives the same results to the bit"},
+       "march the pixels of a row in SIMD lanes (AVX-512, AVX2, ... chosen at run time); false "
+       "runs the scalar reference, which gives the same results to the bit"},
       {"search_scale", &Params::search_scale, 0, 8, "pixels",
        "the horizon search and gather run on every n-th pixel of every n-th row (1/n^2 of the "
        "cost) and their result is upsampled to every pixel over the same surface (depth- and "
