@@ -22,7 +22,6 @@
 //
 #include <hwy/highway.h>
 
-#include <climits>
 #include <cstdint>
 
 #include "hbil/march_simd-inl.h"
@@ -65,7 +64,6 @@ void MarchBitmaskRow(const SampleView& view, int i0, int j, int count, const flo
   HWY_ALIGN float b_bx[(kSectors + 1) * kMaxLanes];
   HWY_ALIGN float b_by[(kSectors + 1) * kMaxLanes];
   HWY_ALIGN float lane_x[kMaxLanes], lane_y[kMaxLanes];
-  HWY_ALIGN float o_ao[kMaxLanes], o_vis[kMaxLanes], o_b[3][kMaxLanes], o_e[3][kMaxLanes];
 
   if (!view.radiance) log = nullptr;
   // The gather log, lane by lane until the lanes' pixels are appended in order.
@@ -84,7 +82,6 @@ void MarchBitmaskRow(const SampleView& view, int i0, int j, int count, const flo
     const PixelLanes px = LoadPixels(d, view, i0, j, base, count, c);
     if (hn::AllFalse(d, px.valid)) continue;
     const V3 &P = px.P, &wo = px.wo, &ray_P = px.ray_P;
-    const MF valid = px.valid;
     auto offset = [&](int q) { return StepOffset(d, px, c, fraction, q); };
 
     VF acc_ao = zero, acc_vis = zero;
@@ -256,28 +253,11 @@ void MarchBitmaskRow(const SampleView& view, int i0, int j, int count, const flo
       acc_e = Select(live, Add3(acc_e, irradiance), acc_e);
       if (log) end_slice();
     }
-    hn::Store(acc_ao, d, o_ao);
-    hn::Store(acc_vis, d, o_vis);
-    hn::Store(acc_b.x, d, o_b[0]);
-    hn::Store(acc_b.y, d, o_b[1]);
-    hn::Store(acc_b.z, d, o_b[2]);
-    hn::Store(acc_e.x, d, o_e[0]);
-    hn::Store(acc_e.y, d, o_e[1]);
-    hn::Store(acc_e.z, d, o_e[2]);
-    HWY_ALIGN float valid_f[kMaxLanes];
-    hn::Store(hn::IfThenElseZero(valid, one), d, valid_f);
-    for (size_t l = 0; l < N && base + int(l) < count; ++l) {
-      if (valid_f[l] == 0.f) continue;
-      if (log) {
-        log->entries.insert(log->entries.end(), lane_entries[l].begin(), lane_entries[l].end());
-        log->counts.insert(log->counts.end(), lane_counts[l].begin(), lane_counts[l].end());
-      }
-      PixelSums& r = out[base + l];
-      r.ao = o_ao[l];
-      r.vis = o_vis[l];
-      r.bent = Vec3{o_b[0][l], o_b[1][l], o_b[2][l]};
-      r.irradiance = Vec3{o_e[0][l], o_e[1][l], o_e[2][l]};
-    }
+    StoreSums(d, px.valid, base, count, acc_ao, acc_vis, acc_b, acc_e, out, [&](size_t l) {
+      if (!log) return;
+      log->entries.insert(log->entries.end(), lane_entries[l].begin(), lane_entries[l].end());
+      log->counts.insert(log->counts.end(), lane_counts[l].begin(), lane_counts[l].end());
+    });
   }
 }
 
@@ -295,19 +275,10 @@ const char* march_simd_target() {
 void march_bitmask_row(const SampleView& view, int i0, int j, int count, const float* phi,
                        int n_slices, const float* fraction, const HorizonConfig& c, PixelSums* out,
                        GatherLog* log) {
-  // The lanes index the view's floats with 32-bit integers: a view too large for them (more
-  // than about 700 million texels) is marched by the scalar reference instead.
-  const std::int64_t last =
-      std::int64_t(view.height - 1) * view.row + std::int64_t(view.width - 1) * view.col;
-  if (3 * last + 2 > std::int64_t(INT32_MAX)) {
-    for (int k = 0; k < count; ++k) {
-      const std::ptrdiff_t at = view.index(i0 + k, j);
-      if (!(view.position[at].z < ViewGBuffer::kBackground)) continue;
-      out[k] = march_bitmask_pixel(view, i0 + k, j, view.position[at], view.normal[at], phi,
-                                   n_slices, fraction, c, log);
-    }
-    return;
-  }
+  auto scalar = [&](int i, const Vec3& P, const Vec3& n) {
+    return march_bitmask_pixel(view, i, j, P, n, phi, n_slices, fraction, c, log);
+  };
+  if (march::march_row_scalar_if_too_large(view, i0, j, count, out, scalar)) return;
   HWY_DYNAMIC_DISPATCH(MarchBitmaskRow)(view, i0, j, count, phi, n_slices, fraction, c, out, log);
 }
 }  // namespace hbil

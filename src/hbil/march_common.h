@@ -6,9 +6,12 @@
 #pragma once
 
 #include <algorithm>
+#include <climits>
 #include <cmath>
+#include <cstdint>
 #include <numbers>
 
+#include "hbil/gbuffer.h"
 #include "hbil/horizon.h"
 
 namespace hbil::march {
@@ -166,6 +169,23 @@ inline StepResult take_step(const SampleView& view, int i, int j, int k, float s
   st.dist2 = dot(st.d3, st.d3);
   if (!(st.dist2 < m.rg2) || st.dist2 <= 0.f) return StepResult::skip;
   return StepResult::use;
+}
+
+// The SIMD row marches index the view's floats with 32-bit lane integers: a view too large
+// for them (more than about 700 million texels) is marched pixel by pixel by the scalar
+// reference, march_one(i, P, n) giving the sums of texel (i, j).
+template <class MarchOne>
+bool march_row_scalar_if_too_large(const SampleView& view, int i0, int j, int count, PixelSums* out,
+                                   MarchOne march_one) {
+  const std::int64_t last =
+      std::int64_t(view.height - 1) * view.row + std::int64_t(view.width - 1) * view.col;
+  if (3 * last + 2 <= std::int64_t(INT32_MAX)) return false;
+  for (int k = 0; k < count; ++k) {
+    const std::ptrdiff_t at = view.index(i0 + k, j);
+    if (!(view.position[at].z < ViewGBuffer::kBackground)) continue;
+    out[k] = march_one(i0 + k, view.position[at], view.normal[at]);
+  }
+  return true;
 }
 
 }  // namespace hbil::march

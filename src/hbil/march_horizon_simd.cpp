@@ -14,7 +14,6 @@
 //
 #include <hwy/highway.h>
 
-#include <climits>
 #include <cstdint>
 
 #include "hbil/march_simd-inl.h"
@@ -43,7 +42,6 @@ void MarchHorizonRow(const SampleView& view, int i0, int j, int count, const flo
   const bool gather = view.radiance != nullptr;
   const VF zero = hn::Zero(d), one = hn::Set(d, 1.f);
   HWY_ALIGN float lane_a[kMaxLanes], lane_b[kMaxLanes], lane_c[kMaxLanes], lane_d[kMaxLanes];
-  HWY_ALIGN float o_ao[kMaxLanes], o_vis[kMaxLanes], o_b[3][kMaxLanes], o_e[3][kMaxLanes];
   // Per lane: sin and cos of `t` from libm, as the scalar march takes them.
   auto sin_cos = [&](VF t, VF& s, VF& co) {
     hn::Store(t, d, lane_a);
@@ -133,24 +131,7 @@ void MarchHorizonRow(const SampleView& view, int i0, int j, int count, const flo
       acc_b = Select(L.live, Add3(acc_b, Add3(Scale(L.D, t_bx), Scale(px.wo, t_by))), acc_b);
       acc_e = Select(L.live, Add3(acc_e, irradiance), acc_e);
     }
-    hn::Store(acc_ao, d, o_ao);
-    hn::Store(acc_vis, d, o_vis);
-    hn::Store(acc_b.x, d, o_b[0]);
-    hn::Store(acc_b.y, d, o_b[1]);
-    hn::Store(acc_b.z, d, o_b[2]);
-    hn::Store(acc_e.x, d, o_e[0]);
-    hn::Store(acc_e.y, d, o_e[1]);
-    hn::Store(acc_e.z, d, o_e[2]);
-    HWY_ALIGN float valid_f[kMaxLanes];
-    hn::Store(hn::IfThenElseZero(px.valid, one), d, valid_f);
-    for (size_t l = 0; l < N && base + int(l) < count; ++l) {
-      if (valid_f[l] == 0.f) continue;
-      PixelSums& r = out[base + l];
-      r.ao = o_ao[l];
-      r.vis = o_vis[l];
-      r.bent = Vec3{o_b[0][l], o_b[1][l], o_b[2][l]};
-      r.irradiance = Vec3{o_e[0][l], o_e[1][l], o_e[2][l]};
-    }
+    StoreSums(d, px.valid, base, count, acc_ao, acc_vis, acc_b, acc_e, out, [](size_t) {});
   }
 }
 
@@ -164,18 +145,10 @@ HWY_EXPORT(MarchHorizonRow);
 void march_horizon_row(const SampleView& view, int i0, int j, int count, const float* phi,
                        int n_slices, const float* fraction, const HorizonConfig& c,
                        PixelSums* out) {
-  // As march_bitmask_row: views too large for 32-bit lane indices go to the scalar march.
-  const std::int64_t last =
-      std::int64_t(view.height - 1) * view.row + std::int64_t(view.width - 1) * view.col;
-  if (3 * last + 2 > std::int64_t(INT32_MAX)) {
-    for (int k = 0; k < count; ++k) {
-      const std::ptrdiff_t at = view.index(i0 + k, j);
-      if (!(view.position[at].z < ViewGBuffer::kBackground)) continue;
-      out[k] = march_horizon_pixel(view, i0 + k, j, view.position[at], view.normal[at], phi,
-                                   n_slices, fraction, c);
-    }
-    return;
-  }
+  auto scalar = [&](int i, const Vec3& P, const Vec3& n) {
+    return march_horizon_pixel(view, i, j, P, n, phi, n_slices, fraction, c);
+  };
+  if (march::march_row_scalar_if_too_large(view, i0, j, count, out, scalar)) return;
   HWY_DYNAMIC_DISPATCH(MarchHorizonRow)(view, i0, j, count, phi, n_slices, fraction, c, out);
 }
 }  // namespace hbil

@@ -224,6 +224,33 @@ HWY_INLINE StepLanes TakeStep(DF d, const SampleView& view, int j, int k, VF sx,
   return st;
 }
 
+// The lanes' sums into out[base + l], for the valid lanes of the run, in lane order;
+// each(l) runs just before lane l is stored.
+template <class Each>
+HWY_INLINE void StoreSums(DF d, MF valid, int base, int count, VF ao, VF vis, const V3& bent,
+                          const V3& irradiance, PixelSums* out, Each each) {
+  HWY_ALIGN float o_ao[kMaxLanes], o_vis[kMaxLanes], o_b[3][kMaxLanes], o_e[3][kMaxLanes];
+  HWY_ALIGN float valid_f[kMaxLanes];
+  hn::Store(ao, d, o_ao);
+  hn::Store(vis, d, o_vis);
+  hn::Store(bent.x, d, o_b[0]);
+  hn::Store(bent.y, d, o_b[1]);
+  hn::Store(bent.z, d, o_b[2]);
+  hn::Store(irradiance.x, d, o_e[0]);
+  hn::Store(irradiance.y, d, o_e[1]);
+  hn::Store(irradiance.z, d, o_e[2]);
+  hn::Store(hn::IfThenElseZero(valid, hn::Set(d, 1.f)), d, valid_f);
+  for (size_t l = 0; l < hn::Lanes(d) && base + int(l) < count; ++l) {
+    if (valid_f[l] == 0.f) continue;
+    each(l);
+    PixelSums& r = out[base + l];
+    r.ao = o_ao[l];
+    r.vis = o_vis[l];
+    r.bent = Vec3{o_b[0][l], o_b[1][l], o_b[2][l]};
+    r.irradiance = Vec3{o_e[0][l], o_e[1][l], o_e[2][l]};
+  }
+}
+
 }  // namespace simd
 }  // namespace hbil::HWY_NAMESPACE
 HWY_AFTER_NAMESPACE();
