@@ -190,29 +190,34 @@ TEST_F(Cli, RunWritesLayersAndMetadata) {
   }
 }
 
+// With either method's SIMD march.
 TEST_F(Cli, ThreadCountDoesNotChangeBytes) {
-  std::vector<std::string> outs;
-  for (int threads : {1, 2, 3}) {
-    const std::string out = path("out/t" + std::to_string(threads) + "_####.exr");
-    const RunResult r = hbil(run_args(test::kRoomPoles + "/frame_####.exr", out,
-                                      "--frames 1-2 -q --threads " + std::to_string(threads)));
-    ASSERT_EQ(r.code, 0) << r.err;
-    EXPECT_EQ(r.err, "") << "-q prints nothing";
-    outs.push_back(path("out/t" + std::to_string(threads) + "_"));
-  }
-  for (const char* frame : {"0001.exr", "0002.exr"}) {
-    const Pixels a = test::read_pixels(outs[0] + frame);
-    ASSERT_EQ(a.data.size(), size_t(kSampleW) * kSampleH * kOutputChannels.size());
-    const std::string bytes = test::read_text(outs[0] + frame);
-    const std::string png = fs::path(frame).replace_extension(".png").string();
-    const std::string png_bytes = test::read_text(outs[0] + png);
-    for (size_t k = 1; k < outs.size(); ++k) {
-      SCOPED_TRACE(outs[k] + frame);
-      const Pixels b = test::read_pixels(outs[k] + frame);
-      ASSERT_EQ(a.data.size(), b.data.size());
-      EXPECT_EQ(std::memcmp(a.data.data(), b.data.data(), a.data.size() * sizeof(float)), 0);
-      EXPECT_TRUE(test::read_text(outs[k] + frame) == bytes) << "files differ";
-      EXPECT_TRUE(test::read_text(outs[k] + png) == png_bytes) << "PNGs differ";
+  for (const std::string method : {"bitmask", "horizon"}) {
+    SCOPED_TRACE(method);
+    std::vector<std::string> outs;
+    for (int threads : {1, 2, 3}) {
+      const std::string stem = "out/" + method + "-t" + std::to_string(threads) + "_";
+      const RunResult r = hbil(run_args(
+          test::kRoomPoles + "/frame_####.exr", path(stem + "####.exr"),
+          "--frames 1-2 -q --set method=" + method + " --threads " + std::to_string(threads)));
+      ASSERT_EQ(r.code, 0) << r.err;
+      EXPECT_EQ(r.err, "") << "-q prints nothing";
+      outs.push_back(path(stem));
+    }
+    for (const char* frame : {"0001.exr", "0002.exr"}) {
+      const Pixels a = test::read_pixels(outs[0] + frame);
+      ASSERT_EQ(a.data.size(), size_t(kSampleW) * kSampleH * kOutputChannels.size());
+      const std::string bytes = test::read_text(outs[0] + frame);
+      const std::string png = fs::path(frame).replace_extension(".png").string();
+      const std::string png_bytes = test::read_text(outs[0] + png);
+      for (size_t k = 1; k < outs.size(); ++k) {
+        SCOPED_TRACE(outs[k] + frame);
+        const Pixels b = test::read_pixels(outs[k] + frame);
+        ASSERT_EQ(a.data.size(), b.data.size());
+        EXPECT_EQ(std::memcmp(a.data.data(), b.data.data(), a.data.size() * sizeof(float)), 0);
+        EXPECT_TRUE(test::read_text(outs[k] + frame) == bytes) << "files differ";
+        EXPECT_TRUE(test::read_text(outs[k] + png) == png_bytes) << "PNGs differ";
+      }
     }
   }
 }
