@@ -108,13 +108,11 @@ void MarchBitmaskRow(const SampleView& view, int i0, int j, int count, const flo
       const VF vcd = hn::Set(d, cd), vsd = hn::Set(d, sd);
       for (int k = 0; k <= kSectors; ++k) {
         const VF t = hn::Add(sector0, hn::Set(d, float(k) * kSectorWidth));
-        const VF a = hn::IfThenElse(hn::Lt(t, zero), hn::Set(d, -1.f), one);
-        const VF sin2 = hn::Mul(hn::Sub(t, hn::Mul(sb, cb)), half);
-        const VF sincos = hn::Mul(hn::Mul(sb, sb), half);
-        hn::Store(hn::Mul(a, hn::Add(hn::Mul(nx, sin2), hn::Mul(ny, sincos))), d, b_ao + k * N);
-        hn::Store(hn::Mul(a, hn::Sub(one, cb)), d, b_vis + k * N);
-        hn::Store(hn::Mul(a, sin2), d, b_bx + k * N);
-        hn::Store(hn::Mul(a, sincos), d, b_by + k * N);
+        const Antiderivative g = AntiderivativeAt(d, t, sb, cb, nx, ny);
+        hn::Store(g.ao, d, b_ao + k * N);
+        hn::Store(g.vis, d, b_vis + k * N);
+        hn::Store(g.bx, d, b_bx + k * N);
+        hn::Store(g.by, d, b_by + k * N);
         const VF sn = hn::Add(hn::Mul(sb, vcd), hn::Mul(cb, vsd));
         cb = hn::Sub(hn::Mul(cb, vcd), hn::Mul(sb, vsd));
         sb = sn;

@@ -24,14 +24,6 @@ namespace {
 
 using namespace simd;
 
-// march::antiderivative(t, s, c, nx, ny).ao, per lane.
-HWY_INLINE VF AntiderivativeAo(DF d, VF t, VF s, VF c, VF nx, VF ny) {
-  const VF half = hn::Set(d, 0.5f);
-  const VF a = hn::IfThenElse(hn::Lt(t, hn::Zero(d)), hn::Set(d, -1.f), hn::Set(d, 1.f));
-  const VF sin2 = hn::Mul(hn::Sub(t, hn::Mul(s, c)), half), sincos = hn::Mul(hn::Mul(s, s), half);
-  return hn::Mul(a, hn::Add(hn::Mul(nx, sin2), hn::Mul(ny, sincos)));
-}
-
 }  // namespace
 
 void MarchHorizonRow(const SampleView& view, int i0, int j, int count, const float* phi,
@@ -99,8 +91,8 @@ void MarchHorizonRow(const SampleView& view, int i0, int j, int count, const flo
           // sign * sqrt(max(0, 1 − cos²))
           const VF s2 = hn::Sub(one, hn::Mul(cos_f, cos_f));
           const VF sin_f = hn::Mul(sign, hn::Sqrt(hn::IfThenElse(hn::Lt(zero, s2), s2, zero)));
-          const VF g_h = AntiderivativeAo(d, h_t, h_s, h_c, L.nx, L.ny);
-          const VF g_f = AntiderivativeAo(d, theta_f, sin_f, cos_f, L.nx, L.ny);
+          const VF g_h = AntiderivativeAt(d, h_t, h_s, h_c, L.nx, L.ny).ao;
+          const VF g_f = AntiderivativeAt(d, theta_f, sin_f, cos_f, L.nx, L.ny).ao;
           const VF w = side == 0 ? hn::Sub(g_h, g_f) : hn::Sub(g_f, g_h);
           h_t = hn::IfThenElse(rise, theta_f, h_t);
           h_s = hn::IfThenElse(rise, sin_f, h_s);
@@ -115,17 +107,10 @@ void MarchHorizonRow(const SampleView& view, int i0, int j, int count, const flo
       VF s1, c1, s0, c0;
       sin_cos(theta1, s1, c1);
       sin_cos(theta0, s0, c0);
-      const VF half = hn::Set(d, 0.5f);
-      auto sgn = [&](VF t) { return hn::IfThenElse(hn::Lt(t, zero), hn::Set(d, -1.f), one); };
-      const VF a1 = sgn(theta1), a0 = sgn(theta0);
-      const VF sin2_1 = hn::Mul(hn::Sub(theta1, hn::Mul(s1, c1)), half);
-      const VF sin2_0 = hn::Mul(hn::Sub(theta0, hn::Mul(s0, c0)), half);
-      const VF sc1 = hn::Mul(hn::Mul(s1, s1), half), sc0 = hn::Mul(hn::Mul(s0, s0), half);
-      const VF t_ao = hn::Sub(hn::Mul(a1, hn::Add(hn::Mul(L.nx, sin2_1), hn::Mul(L.ny, sc1))),
-                              hn::Mul(a0, hn::Add(hn::Mul(L.nx, sin2_0), hn::Mul(L.ny, sc0))));
-      const VF t_vis = hn::Sub(hn::Mul(a1, hn::Sub(one, c1)), hn::Mul(a0, hn::Sub(one, c0)));
-      const VF t_bx = hn::Sub(hn::Mul(a1, sin2_1), hn::Mul(a0, sin2_0));
-      const VF t_by = hn::Sub(hn::Mul(a1, sc1), hn::Mul(a0, sc0));
+      const Antiderivative g1 = AntiderivativeAt(d, theta1, s1, c1, L.nx, L.ny);
+      const Antiderivative g0 = AntiderivativeAt(d, theta0, s0, c0, L.nx, L.ny);
+      const VF t_ao = hn::Sub(g1.ao, g0.ao), t_vis = hn::Sub(g1.vis, g0.vis);
+      const VF t_bx = hn::Sub(g1.bx, g0.bx), t_by = hn::Sub(g1.by, g0.by);
       acc_ao = hn::IfThenElse(L.live, hn::Add(acc_ao, t_ao), acc_ao);
       acc_vis = hn::IfThenElse(L.live, hn::Add(acc_vis, t_vis), acc_vis);
       acc_b = Select(L.live, Add3(acc_b, Add3(Scale(L.D, t_bx), Scale(px.wo, t_by))), acc_b);

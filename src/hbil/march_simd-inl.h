@@ -80,6 +80,17 @@ HWY_INLINE V3 Gather3(DF d, const Vec3* base, VI idx3) {
   return {hn::GatherIndex(d, b, idx3), hn::GatherIndex(d, b + 0, hn::Add(idx3, one)),
           hn::GatherIndex(d, b, hn::Add(idx3, hn::Add(one, one)))};
 }
+// march::antiderivative(t, s, c, nx, ny), per lane.
+struct Antiderivative {
+  VF ao, vis, bx, by;
+};
+HWY_INLINE Antiderivative AntiderivativeAt(DF d, VF t, VF s, VF c, VF nx, VF ny) {
+  const VF one = hn::Set(d, 1.f), half = hn::Set(d, 0.5f);
+  const VF a = hn::IfThenElse(hn::Lt(t, hn::Zero(d)), hn::Set(d, -1.f), one);
+  const VF sin2 = hn::Mul(hn::Sub(t, hn::Mul(s, c)), half), sincos = hn::Mul(hn::Mul(s, s), half);
+  return {hn::Mul(a, hn::Add(hn::Mul(nx, sin2), hn::Mul(ny, sincos))), hn::Mul(a, hn::Sub(one, c)),
+          hn::Mul(a, sin2), hn::Mul(a, sincos)};
+}
 // facing_weight (march_common.h) of n'·(X − P) / |X − P|.
 HWY_INLINE VF FacingWeight(DF d, VF n_dot_d3, VF dist) {
   const VF zero = hn::Zero(d), one = hn::Set(d, 1.f);
