@@ -190,21 +190,23 @@ TEST_F(Cli, RunWritesLayersAndMetadata) {
   }
 }
 
-// With either method's SIMD march.
+// With either method's SIMD march, and with --overlap.
 TEST_F(Cli, ThreadCountDoesNotChangeBytes) {
   for (const std::string method : {"bitmask", "horizon"}) {
     SCOPED_TRACE(method);
     std::vector<std::string> outs;
-    for (int threads : {1, 2, 3}) {
-      const std::string stem = "out/" + method + "-t" + std::to_string(threads) + "_";
-      const RunResult r = hbil(run_args(
-          test::kRoomPoles + "/frame_####.exr", path(stem + "####.exr"),
-          "--frames 1-2 -q --set method=" + method + " --threads " + std::to_string(threads)));
+    // With and without reading each next frame while the previous one is written.
+    for (const std::string run :
+         {"--threads 1", "--threads 2 --overlap off", "--threads 3", "--threads 2 --overlap on"}) {
+      const std::string stem = "out/" + method + "-" + std::to_string(outs.size()) + "_";
+      const RunResult r =
+          hbil(run_args(test::kRoomPoles + "/frame_####.exr", path(stem + "####.exr"),
+                        "--frames 1-3 -q --set method=" + method + " " + run));
       ASSERT_EQ(r.code, 0) << r.err;
       EXPECT_EQ(r.err, "") << "-q prints nothing";
       outs.push_back(path(stem));
     }
-    for (const char* frame : {"0001.exr", "0002.exr"}) {
+    for (const char* frame : {"0001.exr", "0002.exr", "0003.exr"}) {
       const Pixels a = test::read_pixels(outs[0] + frame);
       ASSERT_EQ(a.data.size(), size_t(kSampleW) * kSampleH * kOutputChannels.size());
       const std::string bytes = test::read_text(outs[0] + frame);

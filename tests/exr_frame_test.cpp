@@ -447,5 +447,86 @@ TEST(ExrLayouts, TiledFileGivesTheScanlineTwinsPixels) {
   }
 }
 
+// Colour fields kept as half (read_fields with keep_half, what `hbil run` does): the packed
+// bits unpack to the floats a plain read gives, through both readers (the ZIP reader on the
+// sample, OpenEXR's on its tiled twin); geometry fields and float channels stay floats.
+TEST(ExrLayouts, HalfColourFieldsUnpackToThePlainReadsFloats) {
+  TempDir dir{test::test_name()};
+  const std::string src = test::kRoomPoles + "/frame_0001.exr";
+  const std::string tiled = dir / "tiled.exr";
+  write_tiled(src, tiled, 32);
+  for (const std::string& path : {src, tiled}) {
+    SCOPED_TRACE(path);
+    Params p;
+    const InputFrame f = open_frame(path, 1, p);
+    const std::vector<std::string> need = fields_needed(f, p);
+    const GBuffer plain = read_fields(f, need, p);
+    GBuffer packed = read_fields(f, need, p, true);
+    std::vector<std::string> names;
+    for (const auto& [field, bits] : packed.packed) {
+      names.push_back(field);
+      EXPECT_EQ(bits.size(), 3 * packed.pixels()) << field;
+      EXPECT_TRUE(packed.rgb(field)->empty()) << field << ": no float copy until unpacked";
+    }
+    EXPECT_EQ(names, (std::vector<std::string>{"diffcol", "diffdir", "emit", "env"}));
+    EXPECT_TRUE(packed.has("diffcol") && packed.has("env") && !packed.has("glosscol"));
+    EXPECT_FALSE(packed.normal.empty());  // geometry is never packed
+    EXPECT_EQ(plain.depth, packed.depth);
+    packed.unpack();
+    EXPECT_TRUE(packed.packed.empty());
+    for (const std::string field : {"diffcol", "diffdir", "emit", "env"}) {
+      const std::vector<Vec3>& a = *const_cast<GBuffer&>(plain).rgb(field);
+      const std::vector<Vec3>& b = *packed.rgb(field);
+      ASSERT_EQ(a.size(), b.size()) << field;
+      EXPECT_EQ(0, std::memcmp(a.data(), b.data(), a.size() * sizeof(Vec3))) << field;
+    }
+  }
+}
+
+std::vector<std::string> with_diffuse_passes(std::vector<std::string> c) {
+  for (const char* pass : {"DiffCol", "DiffDir"})
+    for (const char* k : {".R", ".G", ".B"}) c.push_back(std::string("ViewLayer.") + pass + k);
+  return c;
+}
+
+TEST_F(ExrFrame, FloatColourChannelsAreNotPacked) {
+  const std::string path = file("frame_0012.exr");
+  const std::vector<std::string> channels = with_diffuse_passes(blender_channels("ViewLayer"));
+  write_gbuffer(path, channels);  // every channel 32-bit float
+  Params p;
+  const InputFrame f = open_frame(path, 12, p);
+  const GBuffer g = read_fields(f, fields_needed(f, p), p, true);
+  EXPECT_TRUE(g.packed.empty());
+  ASSERT_EQ(g.diffcol.size(), g.pixels());
+  EXPECT_EQ(g.diffcol[5].x, 0.25f);
+}
+
+TEST_F(ExrFrame, NonFiniteHalfColourIsBadData) {
+  const std::string path = file("frame_0013.exr");
+  const std::vector<std::string> channels = with_diffuse_passes(blender_channels("ViewLayer"));
+  test::Pixels px;
+  px.spec = OIIO::ImageSpec(kW, kH, int(channels.size()), OIIO::TypeDesc::FLOAT);
+  px.spec.channelnames = channels;
+  for (const std::string& c : channels)
+    px.spec.channelformats.push_back(c.find("Diff") != std::string::npos ? OIIO::TypeDesc::HALF
+                                                                         : OIIO::TypeDesc::FLOAT);
+  px.data.resize(size_t(kW) * kH * channels.size());
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x)
+      for (int c = 0; c < int(channels.size()); ++c)
+        px.at(x, y, c) = channels[c] == "ViewLayer.DiffDir.G" && x == 3 && y == 2
+                             ? std::numeric_limits<float>::quiet_NaN()
+                             : value_for(channels[c], x, y);
+  test::write_pixels(path, px);
+  Params p;
+  const InputFrame f = open_frame(path, 13, p);
+  const std::vector<std::string> need = fields_needed(f, p);
+  for (bool keep_half : {false, true}) {
+    SCOPED_TRACE(keep_half);
+    expect_error([&] { read_fields(f, need, p, keep_half); }, Exit::bad_data,
+                 {"frame 13", path, "ViewLayer.DiffDir.G", "pixel (3, 2)", "nan"});
+  }
+}
+
 }  // namespace
 }  // namespace hbil::io

@@ -125,7 +125,7 @@ TEST(Temporal, AutoOutputsAreResolvedOnTheFirstFrame) {
   TemporalChain chain{Params{}};  // outputs "auto": the groove has DiffCol and DiffDir
   const AoFrame f = chain.process(s.g, s.cam, 1, false);
   EXPECT_EQ(f.irradiance.size(), s.g.pixels());
-  EXPECT_EQ(f.composite.size(), 4 * s.g.pixels());
+  EXPECT_EQ(f.composite.size(), s.g.pixels());
 }
 
 TEST(Temporal, VectorPassOnlyForThePreviousFrame) {

@@ -1,4 +1,5 @@
 // run.cpp: `hbil run INPUT -o OUTPUT`: the per-frame chain over a sequence.
+#include <malloc.h>
 #include <tbb/global_control.h>
 #include <unistd.h>
 
@@ -35,6 +36,7 @@ struct RunOptions {
   std::string input, output, frames, cut_frames;
   int threads = 0, preroll = 0;
   bool quiet = false, verbose = false, no_display = false;
+  std::string overlap = "auto";  // on, off, auto
   ParamOptions params;
   // Display images through OpenColorIO.
   std::string display_out, display_layer, ocio_config, input_space, display, view;
@@ -121,7 +123,14 @@ const std::vector<float>& display_pixels(const AoFrame& f, const std::string& la
   const size_t n = size_t(f.width) * f.height;
   if (layer == "composite") {
     channels = 4;
-    return f.composite;
+    scratch.resize(n * 4);
+    for (size_t i = 0; i < n; ++i) {
+      const Vec3& c = f.composite[i];
+      float* px = &scratch[4 * i];
+      px[0] = c.x, px[1] = c.y, px[2] = c.z;
+      px[3] = f.composite_alpha.empty() ? 1.f : f.composite_alpha[i];
+    }
+    return scratch;
   }
   if (layer == "ao" && f.ao_rgb.empty()) {
     channels = 1;
@@ -145,6 +154,14 @@ std::string join_outputs(const std::vector<std::string>& v) {
 }
 
 void run(const RunOptions& o) {
+  // glibc serves buffers above its heap threshold from mmap and returns them to the system
+  // when they are freed; smaller ones stay in its heaps for reuse. The threshold is fixed here
+  // (glibc's own moves up to 32 MiB as buffers are freed): at 32 MiB where a frame's RGB
+  // float plane fits below it, so that frame buffers are reused without page faults; at 1 MiB
+  // where it does not (3840x2160 and up: those planes are mapped and unmapped every frame
+  // anyway), so that the smaller buffers are returned too and add nothing to the run's peak
+  // memory. 1 MiB until the first frame's size is known.
+  mallopt(M_MMAP_THRESHOLD, 1 << 20);
   const Params requested = o.params.load();
   const Job job = plan(o);
   // Outputs "auto" are resolved once, on the first frame's header: every frame then writes
@@ -153,6 +170,9 @@ void run(const RunOptions& o) {
   const io::InputFrame first =
       io::open_frame(job.in.path(job.frames.front()), job.frames.front(), requested);
   const Params p = io::resolve_outputs(first, requested, &why_dropped);
+  constexpr size_t kHeapMax = size_t(32) << 20;
+  if (size_t(first.spec.width) * size_t(first.spec.height) * sizeof(Vec3) <= kHeapMax)
+    mallopt(M_MMAP_THRESHOLD, int(kHeapMax));
   if (!o.quiet) {
     std::cerr << "hbil: outputs: " << join_outputs(p.outputs) << "\n";
     if (!why_dropped.empty())
@@ -246,7 +266,8 @@ void run(const RunOptions& o) {
     const auto t0 = Clock::now();
     Loaded l;
     l.in = io::open_frame(job.in.path(frame), frame, p);
-    l.g = io::read_fields(l.in, io::fields_needed(l.in, p), p);
+    // Colour fields stored as half stay half until the frame's geometry is done with.
+    l.g = io::read_fields(l.in, io::fields_needed(l.in, p), p, true);
     const auto t_read = Clock::now();
     l.cam = io::find_camera(l.in, l.g, p);
     l.read_ms = ms(t0, t_read);
@@ -286,9 +307,15 @@ void run(const RunOptions& o) {
     const bool temporal = p.temporal && order.size() > 1;
     std::optional<TemporalChain> chain;
     if (temporal) chain.emplace(p);
-    // The frame loop overlaps: frame k+1 is read and frame k−1 written while frame k is
-    // computed. Each stage keeps the frame order and the computation does not depend on
-    // the overlap, so the output bytes are those of a loop that does one thing at a time.
+    // With the overlap, frame k+1 is read and frame k−1 written while frame k is computed
+    // (5-20 % faster on 2 cores, measured at 256x144 to 3840x2160; three frames in memory);
+    // without it each frame is read, computed and written in turn, so that one frame is in
+    // memory. "auto" overlaps up to 2^22 pixels (2560x1440 and below). Each stage keeps the
+    // frame order, so the output bytes are the same either way.
+    const bool overlap =
+        o.overlap == "on" ||
+        (o.overlap == "auto" &&
+         size_t(first.spec.width) * size_t(first.spec.height) <= (size_t(1) << 22));
     std::future<Loaded> next = std::async(std::launch::async, load, order.front());
     std::future<Written> writing;  // the previous frame's files
     std::string first_path;
@@ -298,12 +325,17 @@ void run(const RunOptions& o) {
       const int frame = order[k];
       const bool preroll = k < job.preroll.size();
       Loaded cur = next.get();
-      if (k + 1 < order.size()) next = std::async(std::launch::async, load, order[k + 1]);
+      auto read_next = [&] {
+        if (k + 1 < order.size()) next = std::async(std::launch::async, load, order[k + 1]);
+      };
+      if (overlap) read_next();
+      if (writing.valid()) report(writing.get());
       const io::InputFrame& in = cur.in;
       if (k == 0) {
         width = in.spec.width;
         height = in.spec.height;
         first_path = in.path;
+
       } else if (in.spec.width != width || in.spec.height != height) {
         throw Error(Exit::bad_data, in.where() + ": resolution " + std::to_string(in.spec.width) +
                                         "x" + std::to_string(in.spec.height) + " differs from " +
@@ -313,10 +345,12 @@ void run(const RunOptions& o) {
       const auto t_compute = Clock::now();
       TemporalReport rep;
       AoFrame result =
-          chain ? chain->process(cur.g, cur.cam, frame, job.cuts.count(frame) > 0,
+          chain ? chain->process(std::move(cur.g), cur.cam, frame, job.cuts.count(frame) > 0,
                                  environment ? &*environment : nullptr, &rep)
-                : compute_ao_frame(cur.g, cur.cam, p, environment ? &*environment : nullptr);
+                : (cur.g.unpack(),
+                   compute_ao_frame(cur.g, cur.cam, p, environment ? &*environment : nullptr));
       const double compute_ms = ms(t_compute, Clock::now());
+      if (!overlap && preroll) read_next();
       if (rep.cut) {
         const std::string line = "hbil: frame " + std::to_string(frame) + ": cut (" +
                                  rep.cut_reason + "), history dropped";
@@ -347,7 +381,6 @@ void run(const RunOptions& o) {
                       rep.reprojection.c_str());
         w.history = h;
       }
-      if (writing.valid()) report(writing.get());
       // The input's header and the camera go with the frame to its writer.
       writing = std::async(std::launch::async, [&, w, result = std::move(result), spec = in.spec,
                                                 cam = cur.cam]() mutable {
@@ -367,6 +400,10 @@ void run(const RunOptions& o) {
         w.write_ms = ms(t_write, Clock::now());
         return w;
       });
+      if (!overlap) {
+        report(writing.get());
+        read_next();
+      }
     }
     if (writing.valid()) report(writing.get());
     batch.commit();
@@ -408,6 +445,12 @@ void add_run(CLI::App& app) {
   cmd->add_option("--cut-frames", o->cut_frames,
                   "temporal chain: frames that start a new shot (history dropped), e.g. 12,40; "
                   "cuts are also detected");
+  cmd->add_option(
+         "--overlap", o->overlap,
+         "read the next frame and write the previous one while a frame computes: on, off, or auto "
+         "(on up to 4.2 megapixels, off above, to hold one frame in memory)")
+      ->default_val("auto")
+      ->check(CLI::IsMember({"on", "off", "auto"}));
   cmd->add_option("--threads", o->threads,
                   "worker threads (0 = all cores); results are identical for any count")
       ->default_val(0)

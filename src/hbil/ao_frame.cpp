@@ -44,7 +44,7 @@ AoFrame compute_ao_frame(const GBuffer& g, const Camera& cam, const Params& p,
 
 Params resolve_frame_outputs(const GBuffer& g, const Params& requested) {
   return resolve_outputs(requested, [&g](const std::string& o) {
-    return o == "ao" || o == "bentcone" || (!g.diffcol.empty() && !g.diffdir.empty());
+    return o == "ao" || o == "bentcone" || (g.has("diffcol") && g.has("diffdir"));
   });
 }
 
@@ -59,7 +59,7 @@ AoFrame compute_ao_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& c
 }
 
 HorizonImage search_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& cam,
-                          const Params& p, const FrameInputs& in) {
+                          const Params& p, FrameInputs in) {
   HorizonConfig c = make_horizon_config(p, cam);
   if (in.rotate)
     frame_rotation(in.frame, p.interleave ? 16 * p.slices : p.slices, c.rotation, c.jitter_shift);
@@ -74,9 +74,14 @@ HorizonImage search_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& 
   const float tol = float(p.depth_tolerance);
   const ViewGBuffer lo = f > 1 ? reduce_view(v, f) : ViewGBuffer{};
   const ViewGBuffer& sv = f > 1 ? lo : v;
-  auto search = [&](const std::vector<Vec3>* radiance) {
+  // `radiance` (or null) is released once the search has what it reads of it.
+  auto search = [&](std::vector<Vec3>* radiance) {
     std::vector<Vec3> reduced;
-    if (f > 1 && radiance) radiance = &(reduced = reduce_radiance(v, lo, f, *radiance, tol));
+    if (f > 1 && radiance) {
+      reduced = reduce_radiance(v, lo, f, *radiance, tol);
+      std::vector<Vec3>().swap(*radiance);
+      radiance = &reduced;
+    }
     HorizonImage h = p.interleave ? horizon_interleaved(sv, c, p.slices, radiance, true, reuse)
                                   : horizon_full(sv, c, p.slices, radiance);
     if (p.interleave && p.spatial_filter) h = spatial_filter(sv, h, tol);
@@ -85,12 +90,17 @@ HorizonImage search_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& 
   // Bounce k gathers the outgoing radiance of bounce k − 1 (bounce 0: direct light and
   // emission, plus the previous frame's indirect light when the temporal chain feeds it
   // back). Occlusion is the same every time; the last search's is kept.
+  // Each buffer is released at its last use: the feedback and the previous bounce once the
+  // source radiance is made, the source radiance once the march has what it reads.
   HorizonImage h;
-  std::vector<Vec3> irradiance;
-  if (gather && in.feedback) irradiance = *in.feedback;
   const bool fresnel = !g.f0.empty() || !g.metallic.empty();
   for (int bounce = 0; bounce < (gather ? p.bounces : 1); ++bounce) {
-    const std::vector<Vec3> L = gather ? source_radiance(g, irradiance) : std::vector<Vec3>{};
+    std::vector<Vec3> L;
+    if (gather) {
+      L = source_radiance(g, bounce == 0 ? in.feedback : h.irradiance);
+      std::vector<Vec3>().swap(in.feedback);
+      h = HorizonImage{};
+    }
     h = search(gather ? &L : nullptr);
     if (fresnel)
       for (size_t i = 0; i < h.irradiance.size(); ++i) {
@@ -98,41 +108,47 @@ HorizonImage search_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& 
         Vec3& e = h.irradiance[i];
         e = Vec3{w.x * e.x, w.y * e.y, w.z * e.z};
       }
-    irradiance = h.irradiance;
   }
   return h;
 }
 
 AoFrame assemble_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& cam, const Params& p,
-                       const HorizonImage& h, const SH9* environment) {
-  const std::vector<Vec3>& world_normal = g.normal;
+                       HorizonImage h, const SH9* environment, GBuffer* release) {
   const bool gather = gathers(p);
   const bool far = p.wants("farfield") || (p.wants("composite") && environment);
   if (far && !environment) throw Error(Exit::preset, "output farfield needs an environment");
+  const size_t n = v.pixels();
+  if (h.ao.size() != n || h.vis.size() != n || h.bent.size() != n ||
+      (gather && h.irradiance.size() != n))
+    throw Error(Exit::failure, "assemble_frame: the search result does not match the frame");
+  // ao, cone_cos, bent and irradiance are computed in place, over h.ao, h.vis, h.bent and
+  // h.irradiance: each pixel reads its search values before it writes its outputs.
   AoFrame out;
   out.width = v.width;
   out.height = v.height;
-  out.ao.assign(v.pixels(), 1.f);
-  out.cone_cos.assign(v.pixels(), 0.f);
-  out.bent.assign(v.pixels(), Vec3{});
-  if (gather) {
-    out.irradiance.assign(v.pixels(), Vec3{});
-    out.indirect.assign(v.pixels(), Vec3{});
-  }
-  const bool multibounce = p.ao_multibounce && p.wants("ao");
-  if (multibounce) out.ao_rgb.assign(v.pixels(), Vec3{1, 1, 1});
-  if (far) out.farfield.assign(v.pixels(), Vec3{});
+  out.ao = std::move(h.ao);
+  out.cone_cos = std::move(h.vis);
+  out.bent = std::move(h.bent);
+  if (gather) out.irradiance = std::move(h.irradiance);
+  // The composite first: the fields only it reads are released (with `release`) before the
+  // other outputs take memory.
   const bool composite = p.wants("composite");
-  if (composite) out.composite.assign(v.pixels() * 4, 0.f);
-  tbb::parallel_for(0, v.height, [&](int y) {
-    for (int x = 0; x < v.width; ++x) {
-      const size_t i = size_t(y) * v.width + x;
-      if (!world_normal.empty()) out.bent[i] = world_normal[i];
-      if (composite) {
+  if (composite) {
+    if (release) {  // over DiffDir: each pixel reads its DiffDir before it writes
+      out.composite = std::move(release->diffdir);
+      out.composite_alpha = std::move(release->alpha);
+    } else {
+      out.composite.resize(n);
+      out.composite_alpha = g.alpha;
+    }
+    const std::vector<Vec3>& diffdir = release ? out.composite : g.diffdir;
+    tbb::parallel_for(0, v.height, [&](int y) {
+      for (int x = 0; x < v.width; ++x) {
+        const size_t i = size_t(y) * v.width + x;
         // composite = DiffCol × (DiffDir + E_near/π [+ E_far/π]) + Emit + Env + glossy +
         // transmission. Every term is a pixel-filtered pass, so the sum is premultiplied.
-        Vec3 e = g.diffdir[i];
-        if (!v.is_background(i)) e += h.irradiance[i];
+        Vec3 e = diffdir[i];
+        if (!v.is_background(i)) e += out.irradiance[i];
         Vec3 rgb{g.diffcol[i].x * e.x, g.diffcol[i].y * e.y, g.diffcol[i].z * e.z};
         for (const std::vector<Vec3>* add : {&g.emit, &g.env})
           if (!add->empty()) rgb += (*add)[i];
@@ -145,19 +161,38 @@ AoFrame assemble_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& cam
         };
         lobe(g.glosscol, g.glossdir, g.glossind);
         lobe(g.transcol, g.transdir, g.transind);
-        float* px = &out.composite[4 * i];
-        px[0] = rgb.x, px[1] = rgb.y, px[2] = rgb.z;
-        px[3] = g.alpha.empty() ? 1.f : g.alpha[i];
+        out.composite[i] = rgb;
       }
-      if (v.is_background(i)) continue;
+    });
+  }
+  if (release) {
+    for (std::vector<Vec3>* f :
+         {&release->emit, &release->env, &release->glosscol, &release->glossdir, &release->glossind,
+          &release->transcol, &release->transdir, &release->transind})
+      std::vector<Vec3>().swap(*f);
+  }
+  if (gather) out.indirect.assign(n, Vec3{});
+  const bool multibounce = p.ao_multibounce && p.wants("ao");
+  if (multibounce) out.ao_rgb.assign(n, Vec3{1, 1, 1});
+  if (far) out.farfield.assign(n, Vec3{});
+  const std::vector<Vec3>& world_normal = g.normal;
+  tbb::parallel_for(0, v.height, [&](int y) {
+    for (int x = 0; x < v.width; ++x) {
+      const size_t i = size_t(y) * v.width + x;
+      if (v.is_background(i)) {
+        out.ao[i] = 1.f;
+        out.cone_cos[i] = 0.f;
+        out.bent[i] = world_normal.empty() ? Vec3{} : world_normal[i];
+        if (gather) out.irradiance[i] = Vec3{};
+        continue;
+      }
       if (gather) {
-        const Vec3 e = h.irradiance[i], a = g.diffcol[i];
-        out.irradiance[i] = e;
+        const Vec3 e = out.irradiance[i], a = g.diffcol[i];
         out.indirect[i] = Vec3{a.x * e.x, a.y * e.y, a.z * e.z};
       }
-      out.ao[i] = std::clamp(h.ao[i], 0.f, 1.f);
-      out.cone_cos[i] = std::clamp(1.f - h.vis[i], 0.f, 1.f);  // eq. 12
-      const Vec3 b = Vec3(normalize_or_zero(cam.view_dir_to_world(Vec3d(h.bent[i]))));
+      out.ao[i] = std::clamp(out.ao[i], 0.f, 1.f);
+      out.cone_cos[i] = std::clamp(1.f - out.cone_cos[i], 0.f, 1.f);  // eq. 12
+      const Vec3 b = Vec3(normalize_or_zero(cam.view_dir_to_world(Vec3d(out.bent[i]))));
       // Fully occluded: no bent direction; fall back to the (unit) normal.
       out.bent[i] =
           dot(b, b) > 0 ? b : Vec3(normalize_or_zero(cam.view_dir_to_world(Vec3d(v.normal[i]))));
@@ -169,9 +204,10 @@ AoFrame assemble_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& cam
         out.farfield[i] = Vec3{w.x * e.x, w.y * e.y, w.z * e.z};
         if (composite) {
           const Vec3 a = g.diffcol[i], f = out.farfield[i];
-          out.composite[4 * i] += a.x * f.x;
-          out.composite[4 * i + 1] += a.y * f.y;
-          out.composite[4 * i + 2] += a.z * f.z;
+          Vec3& c = out.composite[i];
+          c.x += a.x * f.x;
+          c.y += a.y * f.y;
+          c.z += a.z * f.z;
         }
       }
     }

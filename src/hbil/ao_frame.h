@@ -23,8 +23,9 @@ struct AoFrame {
   std::vector<Vec3> indirect;    // DiffCol × E_near / π: comparable to DiffCol × DiffInd
   std::vector<Vec3> ao_rgb;      // ao_multibounce: multi-bounce AO per channel
   std::vector<Vec3> farfield;    // far-field irradiance / π in the bent cone (§2.2.4)
-  std::vector<float> composite;  // RGBA, premultiplied like Blender's passes
-  std::vector<float> history;    // temporal chain: frames accumulated per pixel (0: background)
+  std::vector<Vec3> composite;   // premultiplied like Blender's passes
+  std::vector<float> composite_alpha;  // its alpha (the input's); empty: 1 everywhere
+  std::vector<float> history;  // temporal chain: frames accumulated per pixel (0: background)
 };
 
 // The diffusely reflected radiance a pixel sends to its neighbours (HBIL eq. 16-17):
@@ -51,18 +52,22 @@ struct FrameInputs {
   bool rotate = false;  // turn the slices and shift the step jitter by the frame number
   int frame = 0;
   // E/π per pixel added to DiffDir in the source radiance of the first bounce (the previous
-  // frame's indirect light, reprojected), or null.
-  const std::vector<Vec3>* feedback = nullptr;
+  // frame's indirect light, reprojected), or empty. search_frame releases it once used.
+  std::vector<Vec3> feedback;
 };
 Params resolve_frame_outputs(const GBuffer& g, const Params& requested);
 // Whether the outputs need the irradiance gather (irradiance, indirect, composite).
 bool gathers(const Params& p);
 HorizonImage search_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& cam,
-                          const Params& p, const FrameInputs& in);
+                          const Params& p, FrameInputs in);
 // ao, cone and bent from h.ao, h.vis, h.bent (view space), and the colour outputs from
-// h.irradiance.
+// h.irradiance. The outputs take over h's buffers (pass it with std::move where it is not
+// needed after), so that a frame's search result and outputs are not both in memory.
+// `release` (g itself, or null): the composite is made in place over g's DiffDir and takes
+// over its alpha, and the fields only it reads (Emit, Env, the glossy and transmission
+// passes) are freed once it is made.
 AoFrame assemble_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& cam, const Params& p,
-                       const HorizonImage& h, const SH9* environment);
+                       HorizonImage h, const SH9* environment, GBuffer* release = nullptr);
 
 // The same from an already prepared view-space G-buffer (used by tests and benchmarks).
 // `g` supplies the world normals and, for irradiance, the colour fields.

@@ -3,10 +3,57 @@
 
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 
 namespace hbil {
+
+float half_to_float(std::uint16_t h) {
+  const std::uint32_t sign = std::uint32_t(h & 0x8000u) << 16, exp = (h >> 10) & 0x1fu,
+                      man = h & 0x3ffu;
+  std::uint32_t bits;
+  if (exp == 0) {  // zero or subnormal: man × 2^-24, exact in a float
+    const float f = std::ldexp(float(man), -24);
+    return sign ? -f : f;
+  }
+  if (exp == 31)
+    bits = sign | 0x7f800000u | (man << 13);  // infinity, NaN
+  else
+    bits = sign | ((exp + 112u) << 23) | (man << 13);
+  float f;
+  std::memcpy(&f, &bits, 4);
+  return f;
+}
+
+bool GBuffer::packable(const std::string& field) {
+  for (const char* f : {"diffcol", "diffdir", "emit", "env", "glosscol", "glossdir", "glossind",
+                        "transcol", "transdir", "transind"})
+    if (field == f) return true;
+  return false;
+}
+
+void GBuffer::unpack() {
+  for (auto& [field, bits] : packed) {
+    std::vector<Vec3>& v = *rgb(field);
+    v.resize(bits.size() / 3);
+    tbb::parallel_for(size_t(0), v.size(), size_t(4096), [&](size_t i0) {
+      for (size_t i = i0; i < std::min(v.size(), i0 + 4096); ++i)
+        v[i] = Vec3{half_to_float(bits[3 * i]), half_to_float(bits[3 * i + 1]),
+                    half_to_float(bits[3 * i + 2])};
+    });
+    std::vector<std::uint16_t>().swap(bits);
+  }
+  packed.clear();
+}
+
+bool GBuffer::has(const std::string& field) const {
+  for (const auto& entry : packed)
+    if (entry.first == field) return true;
+  const std::vector<Vec3>* v = const_cast<GBuffer*>(this)->rgb(field);
+  return v && !v->empty();
+}
 
 std::vector<Vec3>* GBuffer::rgb(const std::string& field) {
   if (field == "normal") return &normal;

@@ -1,7 +1,9 @@
 // gbuffer.h: the G-buffer as read from a frame, and its view-space form for the kernels.
 #pragma once
 
+#include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "hbil/camera.h"
@@ -30,11 +32,28 @@ struct GBuffer {
   // Passed through into the composite when present (Blender names: Env, GlossCol, ...).
   std::vector<Vec3> env, glosscol, glossdir, glossind, transcol, transdir, transind;
 
+  // Colour fields the file stores as 16-bit floats can be kept in that form until unpack()
+  // (io::read_fields with keep_half): half their memory while the frame waits to be
+  // computed and while its geometry is; unpacking gives the floats a direct read gives.
+  // Each entry: the field's name and its 3 samples per pixel as IEEE half bits.
+  std::vector<std::pair<std::string, std::vector<std::uint16_t>>> packed;
+  // Whether the colour fields that can be packed (diffcol, diffdir, emit, env and the glossy
+  // and transmission passes) include this one.
+  static bool packable(const std::string& field);
+  // Converts every packed field into its RGB array, one at a time.
+  void unpack();
+
   // The RGB field of that G-buffer field name (diffcol, env, ...), or null.
   std::vector<Vec3>* rgb(const std::string& field);
+  // Whether that field was read (packed or not).
+  bool has(const std::string& field) const;
 
   size_t pixels() const { return size_t(width) * size_t(height); }
 };
+
+// The float an IEEE 754 half (binary16) with these bits stands for, exactly (every half is
+// a float); NaN payloads are kept, as OpenEXR's conversion keeps them.
+float half_to_float(std::uint16_t bits);
 
 // What the horizon search reads: view-space position and unit view-space normal per
 // pixel, rows top-down. A background pixel has position.z = +infinity and a zero normal.

@@ -8,6 +8,7 @@
 #include <numbers>
 #include <sstream>
 
+#include "hbil/error.h"
 #include "hbil/pushpull.h"
 #include "hbil/reproject.h"
 
@@ -40,9 +41,33 @@ TemporalChain::TemporalChain(Params p) : p_(std::move(p)) {}
 
 AoFrame TemporalChain::process(const GBuffer& g, const Camera& cam, int frame, bool cut,
                                const SH9* environment, TemporalReport* report) {
+  return run(g, nullptr, cam, frame, cut, environment, report);
+}
+
+AoFrame TemporalChain::process(GBuffer&& g, const Camera& cam, int frame, bool cut,
+                               const SH9* environment, TemporalReport* report) {
+  return run(g, &g, cam, frame, cut, environment, report);
+}
+
+AoFrame TemporalChain::run(const GBuffer& g, GBuffer* release, const Camera& cam, int frame,
+                           bool cut, const SH9* environment, TemporalReport* report) {
+  if (!g.packed.empty() && !release)
+    throw Error(Exit::failure, "TemporalChain::process: a packed G-buffer (unpack it first)");
   TemporalReport rep;
   if (p_.wants("auto")) p_ = resolve_frame_outputs(g, p_);  // once, on the first frame
   ViewGBuffer v = make_view_gbuffer(g, cam, p_);
+  if (release) {  // the geometry is in v now
+    std::vector<float>().swap(release->depth);
+    std::vector<float>().swap(release->backdepth);
+    std::vector<Vec3>().swap(release->position);
+    // The world normal is what background pixels output as their bent normal (assemble_frame):
+    // released when that is zero everywhere (it is for Blender), kept otherwise.
+    bool zero = true;
+    for (size_t i = 0; zero && i < release->normal.size(); ++i)
+      zero = !v.is_background(i) ||
+             (release->normal[i].x == 0 && release->normal[i].y == 0 && release->normal[i].z == 0);
+    if (zero) std::vector<Vec3>().swap(release->normal);
+  }
   const size_t n_px = v.pixels();
   size_t geometry = 0;
   for (size_t i = 0; i < n_px; ++i) geometry += !v.is_background(i);
@@ -90,6 +115,7 @@ AoFrame TemporalChain::process(const GBuffer& g, const Camera& cam, int frame, b
       rep.history = 0;
     }
   }
+  if (release) std::vector<float>().swap(release->motion);  // only the reprojection reads it
   rep.cut = cut && !rep.first;
   if (rep.first) rep.cut_reason.clear();
   // The previous frame's history and view were only needed for the reprojection: released
@@ -100,7 +126,10 @@ AoFrame TemporalChain::process(const GBuffer& g, const Camera& cam, int frame, b
 
   // Feedback: the history's irradiance, with its holes filled by push/pull.
   const bool gather = gathers(p_);
-  std::vector<Vec3> feedback;
+  FrameInputs in;
+  in.rotate = true;
+  in.frame = frame;
+  std::vector<Vec3>& feedback = in.feedback;
   if (history && gather && p_.feedback) {
     std::vector<float> e(3 * n_px), depth(n_px);
     for (size_t i = 0; i < n_px; ++i) {
@@ -118,11 +147,11 @@ AoFrame TemporalChain::process(const GBuffer& g, const Camera& cam, int frame, b
     for (size_t i = 0; i < n_px; ++i) feedback[i] = Vec3{e[3 * i], e[3 * i + 1], e[3 * i + 2]};
   }
 
-  FrameInputs in;
-  in.rotate = true;
-  in.frame = frame;
-  in.feedback = feedback.empty() ? nullptr : &feedback;
-  HorizonImage h = search_frame(v, g, cam, p_, in);
+  // The colour fields as floats from here on: the history and the feedback's temporaries
+  // are no longer in memory.
+  if (release) release->unpack();
+  HorizonImage h = search_frame(v, g, cam, p_, std::move(in));
+  std::vector<float>().swap(v.thickness);  // only the search reads it
 
   // Accumulation with the history; the result becomes the next frame's history. It is
   // written over the reprojected history in place (each pixel reads its history before it
@@ -159,9 +188,11 @@ AoFrame TemporalChain::process(const GBuffer& g, const Camera& cam, int frame, b
       o[8] = n;
     }
   });
-  AoFrame out = assemble_frame(v, g, cam, p_, h, environment);
-  out.history.resize(n_px);
-  for (size_t i = 0; i < n_px; ++i) out.history[i] = next[kChannels * i + 8];
+  AoFrame out = assemble_frame(v, g, cam, p_, std::move(h), environment, release);
+  if (p_.wants("history")) {
+    out.history.resize(n_px);
+    for (size_t i = 0; i < n_px; ++i) out.history[i] = next[kChannels * i + 8];
+  }
   view_ = std::move(v);
   cam_ = cam;
   frame_ = frame;

@@ -52,6 +52,10 @@ class TemporalChain {
   // of a sequence computes what the whole run computes). `cut`: drop the history first.
   AoFrame process(const GBuffer& g, const Camera& cam, int frame, bool cut,
                   const SH9* environment = nullptr, TemporalReport* report = nullptr);
+  // The same, releasing each of g's fields once it has been used, so that a frame's input
+  // does not stay in memory whole until its outputs are made (what a frame loop uses).
+  AoFrame process(GBuffer&& g, const Camera& cam, int frame, bool cut,
+                  const SH9* environment = nullptr, TemporalReport* report = nullptr);
 
   void reset() { has_history_ = false; }
 
@@ -59,6 +63,9 @@ class TemporalChain {
   static constexpr int kChannels = 9;
 
  private:
+  // `release`: g itself, whose fields are freed after their last use; or null.
+  AoFrame run(const GBuffer& g, GBuffer* release, const Camera& cam, int frame, bool cut,
+              const SH9* environment, TemporalReport* report);
   Params p_;
   bool has_history_ = false;
   ViewGBuffer view_;         // the history's view-space G-buffer

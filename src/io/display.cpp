@@ -223,15 +223,6 @@ std::string write_display_temporary(const std::string& final_path, const std::ve
   // Grey is replicated to RGB: the view may tint neutrals slightly (ACES), and the file
   // should show what the transform produced.
   const int tc = channels == 4 ? 4 : 3;
-  const size_t n = size_t(width) * size_t(height);
-  std::vector<float> buf(n * tc);
-  if (channels == 1) {
-    for (size_t i = 0; i < n; ++i) buf[3 * i] = buf[3 * i + 1] = buf[3 * i + 2] = pixels[i];
-  } else {
-    buf = pixels;
-  }
-  t.apply(buf, width, height, tc);
-
   const bool exr = ext == ".exr", jpeg = ext == ".jpg" || ext == ".jpeg";
   const int fc = jpeg ? 3 : tc;  // JPEG has no alpha
   OIIO::ImageSpec spec(width, height, fc, exr ? OIIO::TypeDesc::HALF : OIIO::TypeDesc::UINT8);
@@ -255,27 +246,46 @@ std::string write_display_temporary(const std::string& final_path, const std::ve
   spec.attribute("hbil:ocio", t.describe());
   if (!extra_description.empty()) spec.attribute("ImageDescription", extra_description);
 
-  // 8 bits: round(255 * clamp(v, 0, 1)); NaN -> 0.
-  std::vector<uint8_t> bytes;
-  if (!exr) {
-    bytes.resize(n * fc);
-    for (size_t i = 0; i < n; ++i)
-      for (int c = 0; c < fc; ++c) {
-        const float v = buf[i * tc + c];
-        // v + 0.5 truncated is lround for the non-negative values left after the clamp.
-        bytes[i * fc + c] = std::isnan(v) ? 0 : uint8_t(255.0f * std::clamp(v, 0.0f, 1.0f) + 0.5f);
-      }
-  }
-
   std::error_code ec;
   const fs::path tmp = prepare_temporary(final_path, "display-");
   auto out = OIIO::ImageOutput::create(tmp.string());
   if (!out)
     throw Error(Exit::output, final_path + ": cannot create an image writer: " + OIIO::geterror());
-  const bool ok = out->open(tmp.string(), spec) &&
-                  (exr ? out->write_image(OIIO::TypeDesc::FLOAT, buf.data())
-                       : out->write_image(OIIO::TypeDesc::UINT8, bytes.data())) &&
-                  out->close();
+  // Transformed and written in strips of rows (each row is transformed on its own, so the
+  // strips do not change the result), so that no copy of the whole image is made.
+  constexpr int kStrip = 64;
+  std::vector<float> buf;
+  std::vector<uint8_t> bytes;
+  bool ok = out->open(tmp.string(), spec);
+  for (int y0 = 0; ok && y0 < height; y0 += kStrip) {
+    const int rows = std::min(kStrip, height - y0);
+    const size_t first = size_t(y0) * size_t(width), n = size_t(rows) * size_t(width);
+    buf.resize(n * tc);
+    if (channels == 1) {
+      for (size_t i = 0; i < n; ++i)
+        buf[3 * i] = buf[3 * i + 1] = buf[3 * i + 2] = pixels[first + i];
+    } else {
+      std::copy_n(pixels.begin() + std::ptrdiff_t(first * tc), n * tc, buf.begin());
+    }
+    t.apply(buf, width, rows, tc);
+    if (exr) {
+      ok = out->write_scanlines(y0, y0 + rows, 0, OIIO::TypeDesc::FLOAT, buf.data());
+      continue;
+    }
+    // 8 bits: round(255 * clamp(v, 0, 1)); NaN -> 0.
+    bytes.resize(n * fc);
+    tbb::parallel_for(0, rows, [&](int r) {
+      for (size_t i = size_t(r) * width; i < size_t(r + 1) * width; ++i)
+        for (int c = 0; c < fc; ++c) {
+          const float v = buf[i * tc + c];
+          // v + 0.5 truncated is lround for the non-negative values left after the clamp.
+          bytes[i * fc + c] =
+              std::isnan(v) ? 0 : uint8_t(255.0f * std::clamp(v, 0.0f, 1.0f) + 0.5f);
+        }
+    });
+    ok = out->write_scanlines(y0, y0 + rows, 0, OIIO::TypeDesc::UINT8, bytes.data());
+  }
+  ok = ok && out->close();
   if (!ok) {
     const std::string why = out->geterror();
     out.reset();

@@ -76,7 +76,17 @@ void convert(const Bytes& bytes, size_t line_bytes, size_t width, size_t row0, s
       const size_t j0 = r * line_bytes + p.offset;
       float* out = p.target->dst + (row0 + r) * width * p.target->stride;
       const size_t stride = p.target->stride;
-      if (bytes.split && p.type == Imf::HALF) {  // the common case, unrolled
+      if (p.target->half) {  // a HALF channel kept as its bits
+        std::uint16_t* bits = p.target->half + (row0 + r) * width * stride;
+        if (bytes.split) {
+          const unsigned char* lo = bytes.lo + j0 / 2;
+          const unsigned char* hi = bytes.hi + j0 / 2;
+          for (size_t x = 0; x < width; ++x) bits[x * stride] = std::uint16_t(lo[x] | hi[x] << 8);
+        } else {
+          for (size_t x = 0; x < width; ++x)
+            bits[x * stride] = std::uint16_t(bytes.sample(j0 + x * 2, 2));
+        }
+      } else if (bytes.split && p.type == Imf::HALF) {  // the common case, unrolled
         const unsigned char* lo = bytes.lo + j0 / 2;
         const unsigned char* hi = bytes.hi + j0 / 2;
         for (size_t x = 0; x < width; ++x) {
@@ -157,7 +167,10 @@ bool read_deflate_scanlines(Imf::InputFile& file, const std::vector<ExrChannelTa
     if (ch.xSampling != 1 || ch.ySampling != 1) return false;
     if (ch.type != Imf::HALF && ch.type != Imf::FLOAT && ch.type != Imf::UINT) return false;
     for (const ExrChannelTarget& t : targets)
-      if (t.name == c.name()) plans.push_back({line_bytes, ch.type, &t});
+      if (t.name == c.name()) {
+        if (t.half && ch.type != Imf::HALF) return false;
+        plans.push_back({line_bytes, ch.type, &t});
+      }
     line_bytes += width * (ch.type == Imf::HALF ? 2 : 4);
   }
   if (plans.size() != targets.size()) return false;

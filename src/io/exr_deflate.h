@@ -13,6 +13,7 @@
 #include <OpenEXR/ImfInputFile.h>
 
 #include <cstddef>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -20,10 +21,13 @@ namespace hbil::io {
 
 // One channel to convert: the sample at (x, y) of the data window, counted from its corner,
 // goes to dst[(y * width + x) * stride].
+// With `half` set, a HALF channel's samples are stored there as they are (their bits), in
+// place of dst.
 struct ExrChannelTarget {
   std::string name;
   float* dst;
   size_t stride;
+  std::uint16_t* half = nullptr;
 };
 
 // Reads the targets' channels of a scanline file compressed with ZIP, ZIPS or nothing, with

@@ -213,6 +213,7 @@ namespace {
 struct FieldTarget {
   std::vector<int> idx;  // the field's channels in the file
   float* dst;
+  std::uint16_t* half = nullptr;  // instead of dst: HALF channels kept as their bits
 };
 
 // Reads the channels of several fields in one pass: EXR compresses all channels of a block
@@ -233,15 +234,18 @@ void read_exr_channels(const InputFrame& f, const std::vector<FieldTarget>& fiel
     std::vector<ExrChannelTarget> targets;
     for (const FieldTarget& t : fields)
       for (size_t c = 0; c < t.idx.size(); ++c)
-        targets.push_back({f.spec.channelnames[t.idx[c]], t.dst + c, t.idx.size()});
+        targets.push_back({f.spec.channelnames[t.idx[c]], t.half ? nullptr : t.dst + c,
+                           t.idx.size(), t.half ? t.half + c : nullptr});
     if (read_deflate_scanlines(file, targets)) return;
     Imf::FrameBuffer fb;
     for (const FieldTarget& t : fields) {
       const size_t m = t.idx.size();
       for (size_t c = 0; c < m; ++c)
-        fb.insert(
-            f.spec.channelnames[t.idx[c]],
-            Imf::Slice::Make(Imf::FLOAT, t.dst + c, dw, sizeof(float) * m, sizeof(float) * m * w));
+        fb.insert(f.spec.channelnames[t.idx[c]],
+                  t.half ? Imf::Slice::Make(Imf::HALF, t.half + c, dw, sizeof(std::uint16_t) * m,
+                                            sizeof(std::uint16_t) * m * w)
+                         : Imf::Slice::Make(Imf::FLOAT, t.dst + c, dw, sizeof(float) * m,
+                                            sizeof(float) * m * w));
     }
     file.setFrameBuffer(fb);
     file.readPixels(dw.min.y, dw.max.y);
@@ -287,7 +291,8 @@ void read_channels(const InputFrame& f, const std::vector<FieldTarget>& fields) 
 
 }  // namespace
 
-GBuffer read_fields(const InputFrame& f, const std::vector<std::string>& fields, const Params& p) {
+GBuffer read_fields(const InputFrame& f, const std::vector<std::string>& fields, const Params& p,
+                    bool keep_half) {
   GBuffer g;
   g.width = f.spec.width;
   g.height = f.spec.height;
@@ -303,7 +308,14 @@ GBuffer read_fields(const InputFrame& f, const std::vector<std::string>& fields,
   std::vector<FieldTarget> targets;
   for (const auto& field : fields) {
     const std::vector<int>& idx = f.channels.at(field);
-    float* dst;
+    float* dst = nullptr;
+    bool half = keep_half && f.openexr && GBuffer::packable(field) && idx.size() == 3;
+    for (int c : idx) half = half && f.spec.channelformat(c) == OIIO::TypeDesc::HALF;
+    if (half) {
+      g.packed.emplace_back(field, std::vector<std::uint16_t>(n * 3));
+      targets.push_back({idx, nullptr, g.packed.back().second.data()});
+      continue;
+    }
     if (std::vector<Vec3>* rgb = g.rgb(field)) {
       rgb->resize(n);
       dst = &rgb->data()->x;
@@ -323,7 +335,11 @@ GBuffer read_fields(const InputFrame& f, const std::vector<std::string>& fields,
     const std::vector<int>& idx = targets[k].idx;
     const float* v = targets[k].dst;
     const size_t m = idx.size(), count = n * m;
-    if (field == "depth" || field == "backdepth") {
+    if (const std::uint16_t* bits = targets[k].half) {
+      for (size_t i = 0; i < count; ++i)
+        if ((bits[i] & 0x7c00u) == 0x7c00u)  // exponent all ones: infinity or NaN
+          bad_value(f, idx[i % m], i / m, half_to_float(bits[i]), "non-finite " + field);
+    } else if (field == "depth" || field == "backdepth") {
       for (size_t i = 0; i < count; ++i) {
         if (!std::isfinite(v[i])) bad_value(f, idx[0], i, v[i], "non-finite " + field);
         if (v[i] < 0) bad_value(f, idx[0], i, v[i], "negative " + field);

@@ -56,7 +56,10 @@ Params resolve_outputs(const InputFrame& f, const Params& p, std::string* why_dr
 // Reads the given fields (all must be present). Checks the data: a depth that is not finite
 // or negative, or a non-finite normal or position, is Error(Exit::bad_data) naming the
 // frame, file, channel, pixel and value. Background (depth >= background_depth) is allowed.
-GBuffer read_fields(const InputFrame& f, const std::vector<std::string>& fields, const Params& p);
+// `keep_half`: the colour fields an OpenEXR file stores as half are kept as their bits in
+// GBuffer::packed (call GBuffer::unpack() before computing with them).
+GBuffer read_fields(const InputFrame& f, const std::vector<std::string>& fields, const Params& p,
+                    bool keep_half = false);
 
 // Whether find_camera will solve the camera from Position: no sidecar beside the file, no
 // camera attributes in its header, and a Position pass (fields_needed then reads it).

@@ -2,6 +2,7 @@
 #include "io/exr_output.h"
 
 #include <Imath/half.h>
+#include <tbb/parallel_for.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -31,9 +32,10 @@ std::vector<OutputChannel> output_plan(const AoFrame& f, const Params& p) {
     if (o == "ao" && f.ao_rgb.empty()) add("ao.Y", f.ao.data(), 1, false);
     if (o == "ao" && !f.ao_rgb.empty()) rgb("ao", f.ao_rgb, false);
     if (o == "farfield") rgb("farfield", f.farfield);
-    if (o == "composite")
-      for (int k = 0; k < 4; ++k)
-        add(std::string("composite.") + "RGBA"[k], f.composite.data() + k, 4, true);
+    if (o == "composite") {
+      rgb("composite", f.composite);
+      add("composite.A", f.composite_alpha.empty() ? nullptr : f.composite_alpha.data(), 1, true);
+    }
     if (o == "bentcone") {
       for (int k = 0; k < 3; ++k)
         add(std::string("bentcone.") + "XYZ"[k], &f.bent.data()->x + k, 3, false);
@@ -146,11 +148,14 @@ std::string write_temporary(const std::string& final_path, const AoFrame& f,
   constexpr int kStrip = 64;
   // Each strip is packed in the file's own channel formats (native data: no conversion in
   // OpenImageIO).
-  std::vector<unsigned char> strip(size_t(kStrip) * f.width * pixel_bytes(plan));
+  const size_t row_bytes = size_t(f.width) * pixel_bytes(plan);
+  std::vector<unsigned char> strip(size_t(kStrip) * row_bytes);
   bool ok = out->open(tmp.string(), spec);
   for (int y0 = 0; ok && y0 < f.height; y0 += kStrip) {
     const int y1 = std::min(y0 + kStrip, f.height);
-    output_rows(plan, f.width, y0, y1, strip.data());
+    tbb::parallel_for(y0, y1, [&](int y) {
+      output_rows(plan, f.width, y, y + 1, strip.data() + size_t(y - y0) * row_bytes);
+    });
     ok = out->write_scanlines(y0, y1, 0, OIIO::TypeUnknown, strip.data());
   }
   if (!ok || !out->close()) {
