@@ -15,7 +15,7 @@ float half_to_float(std::uint16_t h) {
                       man = h & 0x3ffu;
   std::uint32_t bits;
   if (exp == 0) {  // zero or subnormal: man × 2^-24, exact in a float
-    const float f = std::ldexp(float(man), -24);
+    const float f = float(man) * 0x1p-24f;
     return sign ? -f : f;
   }
   if (exp == 31)
@@ -35,13 +35,19 @@ bool GBuffer::packable(const std::string& field) {
 }
 
 void GBuffer::unpack() {
+  if (packed.empty()) return;
+  // Every half's float, from one table (256 KB) built once.
+  static const std::vector<float> table = [] {
+    std::vector<float> t(65536);
+    for (size_t b = 0; b < t.size(); ++b) t[b] = half_to_float(std::uint16_t(b));
+    return t;
+  }();
   for (auto& [field, bits] : packed) {
     std::vector<Vec3>& v = *rgb(field);
     v.resize(bits.size() / 3);
     tbb::parallel_for(size_t(0), v.size(), size_t(4096), [&](size_t i0) {
       for (size_t i = i0; i < std::min(v.size(), i0 + 4096); ++i)
-        v[i] = Vec3{half_to_float(bits[3 * i]), half_to_float(bits[3 * i + 1]),
-                    half_to_float(bits[3 * i + 2])};
+        v[i] = Vec3{table[bits[3 * i]], table[bits[3 * i + 1]], table[bits[3 * i + 2]]};
     });
     std::vector<std::uint16_t>().swap(bits);
   }
