@@ -439,6 +439,16 @@ TEST_F(Cli, ResolutionChangeFailsWithoutOutput) {
                  {"frame 2", in_frame(2), "128x72", "256x144", in_frame(1)});
 }
 
+// The display image is written beside the EXR: when it cannot be, neither stays.
+TEST_F(Cli, UnwritableDisplayImageFailsWithoutOutput) {
+  copy_frame(1);
+  copy_frame(2);
+  test::write_text(path("blocker"), "a file where the display folder would be\n");
+  expect_failure(run_args(path("in/frame_####.exr"), path("out/out_####.exr"),
+                          "--frames 1-2 --display-out " + q(path("blocker/d_####.png"))),
+                 Exit::output, {path("blocker/d_0001.png"), "cannot create folder"});
+}
+
 TEST_F(Cli, MissingInputFrameFailsWithoutOutput) {
   copy_frame(1);
   copy_frame(2);
