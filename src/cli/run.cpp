@@ -159,10 +159,10 @@ void run(const RunOptions& o) {
   // when they are freed; smaller ones stay in its heaps for reuse. The threshold is fixed here
   // (glibc's own moves up to 32 MiB as buffers are freed): at 32 MiB where a frame's RGB
   // float plane fits below it, with the heaps trimmed only above 64 MiB free (glibc's rule
-  // there), so that frame buffers are reused without page faults; at 1 MiB
-  // where it does not (3840x2160 and up: those planes are mapped and unmapped every frame
-  // anyway), so that the smaller buffers are returned too and add nothing to the run's peak
-  // memory. 1 MiB until the first frame's size is known.
+  // there), so that frame buffers are reused without page faults; at 1 MiB where it does not
+  // (3840x2160 and up: those planes are mapped and unmapped every frame anyway), so that the
+  // smaller buffers are returned too and add nothing to the run's peak memory. 1 MiB until
+  // the first frame's size is known.
   mallopt(M_MMAP_THRESHOLD, 1 << 20);
   const Params requested = o.params.load();
   const Job job = plan(o);
@@ -333,13 +333,11 @@ void run(const RunOptions& o) {
         if (k + 1 < order.size()) next = std::async(std::launch::async, load, order[k + 1]);
       };
       if (overlap) read_next();
-      if (writing.valid()) report(writing.get());
       const io::InputFrame& in = cur.in;
       if (k == 0) {
         width = in.spec.width;
         height = in.spec.height;
         first_path = in.path;
-
       } else if (in.spec.width != width || in.spec.height != height) {
         throw Error(Exit::bad_data, in.where() + ": resolution " + std::to_string(in.spec.width) +
                                         "x" + std::to_string(in.spec.height) + " differs from " +
@@ -385,6 +383,7 @@ void run(const RunOptions& o) {
                       rep.reprojection.c_str());
         w.history = h;
       }
+      if (writing.valid()) report(writing.get());  // the previous frame's files
       // The input's header and the camera go with the frame to its writer.
       writing = std::async(std::launch::async, [&, w, result = std::move(result), spec = in.spec,
                                                 cam = cur.cam]() mutable {
