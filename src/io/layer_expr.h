@@ -1,0 +1,161 @@
+// layer_expr.h: layers of an image, layer expressions over them, and the comparison of one
+// image's expression with another's over the valid pixels: the accuracy measure that
+// `hbil compare`, `hbil bench` and the tests share.
+//
+// A layer L of an image is the channel named L, else its channels <L>.<comp>, else
+// <prefix>.<L>.<comp> (Blender's view-layer prefix), ordered R G B A X Y Z W.
+//
+// Layer expressions combine layers per channel with * and + and parentheses:
+//
+//   sum     := product ('+' product)*
+//   product := operand ('*' operand)*
+//   operand := NAME | '(' sum ')'
+//
+// A NAME is any text without + * ( ), spaces around it dropped. Operands have the same
+// number of channels, or 1 (used for every channel); channel k of the result is the
+// arithmetic of channel k of each operand. Cycles writes no indirect-diffuse layer: the
+// reference for hbil's `indirect` is DiffCol*DiffInd, for a composite
+// DiffCol*(DiffDir+DiffInd)+Emit.
+#pragma once
+
+#include <OpenImageIO/imageio.h>
+
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "hbil/error_stats.h"
+
+namespace hbil::io {
+
+// Named float channels of one image: a file, or a frame held in memory.
+class ChannelSource {
+ public:
+  virtual ~ChannelSource() = default;
+  // The file's path, or what the frame is (for messages).
+  virtual const std::string& name() const = 0;
+  virtual int width() const = 0;
+  virtual int height() const = 0;
+  virtual const std::vector<std::string>& channel_names() const = 0;
+  // Channel c, width() * height() values in row order. Throws Error(Exit::input).
+  virtual std::vector<float> read(int c) = 0;
+};
+
+// An image file read through OpenImageIO, one channel at a time.
+class ImageFile : public ChannelSource {
+ public:
+  // Throws Error(Exit::input) naming the file.
+  explicit ImageFile(std::string path);
+  const std::string& name() const override { return path_; }
+  int width() const override { return spec_.width; }
+  int height() const override { return spec_.height; }
+  const std::vector<std::string>& channel_names() const override { return spec_.channelnames; }
+  std::vector<float> read(int c) override;
+  const OIIO::ImageSpec& spec() const { return spec_; }
+
+ private:
+  std::string path_;
+  OIIO::ImageSpec spec_;
+  std::unique_ptr<OIIO::ImageInput> in_;
+};
+
+// Channels held in memory: channel c at src[c][i * stride[c]] (null src: 1 everywhere).
+class MemoryChannels : public ChannelSource {
+ public:
+  struct Channel {
+    std::string name;
+    const float* src = nullptr;
+    size_t stride = 1;
+  };
+  MemoryChannels(std::string name, int width, int height, std::vector<Channel> channels);
+  const std::string& name() const override { return name_; }
+  int width() const override { return width_; }
+  int height() const override { return height_; }
+  const std::vector<std::string>& channel_names() const override { return names_; }
+  std::vector<float> read(int c) override;
+
+ private:
+  std::string name_;
+  int width_, height_;
+  std::vector<Channel> channels_;
+  std::vector<std::string> names_;
+};
+
+// The channels of layer `layer`. Throws Error(Exit::missing_pass) naming the image.
+std::vector<int> layer_channels(const ChannelSource& im, const std::string& layer);
+
+struct LayerExpr {
+  enum Op { layer, add, mul } op = layer;
+  std::string name;             // op == layer
+  std::vector<LayerExpr> args;  // op == add, mul: two or more
+};
+
+// `option` (--layer, --ref, ...) names the expression in messages. Throws
+// Error(Exit::usage) naming the expression and the character where it fails.
+LayerExpr parse_layer_expr(const std::string& option, const std::string& text);
+// The expression in its shortest form: no spaces, parentheses only around a sum in a product.
+std::string to_string(const LayerExpr& e);
+
+// An expression bound to one image: the result's channels, evaluated one at a time, each
+// image channel read once and kept only while a later use is still to come.
+class BoundExpr {
+ public:
+  // Throws Error(Exit::missing_pass) for an absent layer, Error(Exit::usage) for operands
+  // whose channel counts do not match; `option` and `text` name the expression.
+  BoundExpr(const LayerExpr& e, ChannelSource& im, const std::string& option,
+            const std::string& text);
+  ~BoundExpr();
+  BoundExpr(BoundExpr&&) noexcept;
+  size_t channels() const;
+  // "AO.R" for a plain layer, "(DiffCol*DiffInd).R" for an expression.
+  std::string channel_name(size_t k) const;
+  // Channel k of the result (k < n, where n is the count given to prepare()).
+  std::vector<float> channel(size_t k);
+  // Channels 0..n-1 will be asked for, each once (a 1-channel result serves every k).
+  void prepare(size_t n);
+
+  struct Node;  // the bound tree (layer_expr.cpp)
+
+ private:
+  std::unique_ptr<Node> root_;
+  ChannelSource* im_;
+  std::map<int, int> uses_;
+  std::map<int, std::vector<float>> cache_;
+  std::vector<float> evaluate(const Node& b, size_t k);
+  std::vector<float> get(int c);
+};
+
+// Which pixels count. "none": all; "auto": the reference's front depth below
+// `background_depth`, else its alpha above 0, else all; any other text: the channel of that
+// name (in the reference, else in the test) is non-zero.
+struct MaskSpec {
+  std::string mask = "auto";
+  double background_depth = 1e9;
+};
+
+// The valid pixels of a comparison; `described` says how they were chosen.
+std::vector<unsigned char> make_mask(ChannelSource& test, ChannelSource& ref, const MaskSpec& m,
+                                     std::string& described);
+
+struct ChannelError {
+  std::string test, reference;  // channel names
+  ErrorStats stats;
+};
+
+struct LayerComparison {
+  std::vector<ChannelError> channels;
+  ErrorStats overall;
+  std::string mask;  // as make_mask describes it
+};
+
+// An expression of `test` against one of `ref` (one channel against several is compared with
+// each: ao.Y against AO.R, AO.G, AO.B). Throws Error(Exit::bad_data) for images of different
+// sizes, Error(Exit::usage) for channel counts that do not match.
+LayerComparison compare_layers(ChannelSource& test, const LayerExpr& test_expr,
+                               const std::string& test_option, const std::string& test_text,
+                               ChannelSource& ref, const LayerExpr& ref_expr,
+                               const std::string& ref_option, const std::string& ref_text,
+                               const MaskSpec& mask);
+
+}  // namespace hbil::io
