@@ -66,8 +66,8 @@ void compare(const Options& o) {
   for (int f : frames) {
     io::ImageFile test(tp.path(f)), ref(rp.path(f));
     const io::LayerComparison c =
-        io::compare_layers(test, test_expr, "--layer", o.layer, ref, ref_expr, ref_option,
-                           ref_text, {o.mask, o.background_depth});
+        io::compare_layers(test, test_expr, "--layer", o.layer, ref, ref_expr, ref_option, ref_text,
+                           {o.mask, o.background_depth});
     if (per_channel.empty()) {
       per_channel.resize(c.channels.size());
       for (const auto& ch : c.channels) pairs.emplace_back(ch.test, ch.reference);

@@ -40,7 +40,8 @@ struct ErrorStats {
   }
   // RMSE / RMS of the reference; NaN for a reference that is zero everywhere.
   double relative_rmse() const {
-    return ref_sum_sq > 0 ? std::sqrt(sum_sq / ref_sum_sq) : std::numeric_limits<double>::quiet_NaN();
+    return ref_sum_sq > 0 ? std::sqrt(sum_sq / ref_sum_sq)
+                          : std::numeric_limits<double>::quiet_NaN();
   }
   // Sum of the test / sum of the reference; NaN when the reference sums to 0.
   double energy_ratio() const {

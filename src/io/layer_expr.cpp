@@ -19,8 +19,8 @@ ImageFile::ImageFile(std::string path) : path_(std::move(path)) {
 std::vector<float> ImageFile::read(int c) {
   std::vector<float> v(size_t(spec_.width) * spec_.height);
   if (!in_->read_image(0, 0, c, c + 1, OIIO::TypeDesc::FLOAT, v.data()))
-    throw Error(Exit::input, path_ + ": cannot read channel " + spec_.channelnames[c] + ": " +
-                                 in_->geterror());
+    throw Error(Exit::input,
+                path_ + ": cannot read channel " + spec_.channelnames[c] + ": " + in_->geterror());
   return v;
 }
 
@@ -148,8 +148,7 @@ std::string to_string(const LayerExpr& e) {
   std::string s;
   for (const auto& a : e.args) {
     if (!s.empty()) s += e.op == LayerExpr::add ? "+" : "*";
-    s += e.op == LayerExpr::mul && a.op == LayerExpr::add ? "(" + to_string(a) + ")"
-                                                          : to_string(a);
+    s += e.op == LayerExpr::mul && a.op == LayerExpr::add ? "(" + to_string(a) + ")" : to_string(a);
   }
   return s;
 }
@@ -214,7 +213,9 @@ BoundExpr::BoundExpr(const LayerExpr& e, ChannelSource& im, const std::string& o
 BoundExpr::~BoundExpr() = default;
 BoundExpr::BoundExpr(BoundExpr&&) noexcept = default;
 
-size_t BoundExpr::channels() const { return root_->nchannels; }
+size_t BoundExpr::channels() const {
+  return root_->nchannels;
+}
 
 std::string BoundExpr::channel_name(size_t k) const {
   const Node& b = *root_;
@@ -263,7 +264,9 @@ std::vector<float> BoundExpr::evaluate(const Node& b, size_t k) {
   return acc;
 }
 
-std::vector<float> BoundExpr::channel(size_t k) { return evaluate(*root_, k); }
+std::vector<float> BoundExpr::channel(size_t k) {
+  return evaluate(*root_, k);
+}
 
 std::vector<unsigned char> make_mask(ChannelSource& test, ChannelSource& ref, const MaskSpec& o,
                                      std::string& described) {
@@ -325,8 +328,8 @@ LayerComparison compare_layers(ChannelSource& test, const LayerExpr& test_expr,
                                const MaskSpec& mask) {
   if (test.width() != ref.width() || test.height() != ref.height())
     throw Error(Exit::bad_data, test.name() + " is " + std::to_string(test.width()) + "x" +
-                                    std::to_string(test.height()) + " but " + ref.name() +
-                                    " is " + std::to_string(ref.width()) + "x" +
+                                    std::to_string(test.height()) + " but " + ref.name() + " is " +
+                                    std::to_string(ref.width()) + "x" +
                                     std::to_string(ref.height()));
   BoundExpr tb(test_expr, test, test_option, test_text), rb(ref_expr, ref, ref_option, ref_text);
   const size_t n = std::max(tb.channels(), rb.channels());

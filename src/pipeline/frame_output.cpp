@@ -1,0 +1,142 @@
+// frame_output.cpp: see frame_output.h.
+#include "pipeline/frame_output.h"
+
+#include <exception>
+#include <filesystem>
+#include <future>
+
+#include "hbil/error.h"
+
+namespace hbil::pipeline {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// The pixels of a display layer: 1 (ao), 3 or 4 (composite) channels; the frame's own
+// buffer where it is stored that way, else `scratch` filled.
+const std::vector<float>& display_pixels(const AoFrame& f, const std::string& layer, int& channels,
+                                         std::vector<float>& scratch) {
+  const size_t n = size_t(f.width) * f.height;
+  if (layer == "composite") {
+    channels = 4;
+    scratch.resize(n * 4);
+    for (size_t i = 0; i < n; ++i) {
+      const Vec3& c = f.composite[i];
+      float* px = &scratch[4 * i];
+      px[0] = c.x, px[1] = c.y, px[2] = c.z;
+      px[3] = f.composite_alpha.empty() ? 1.f : f.composite_alpha[i];
+    }
+    return scratch;
+  }
+  if (layer == "ao" && f.ao_rgb.empty()) {
+    channels = 1;
+    return f.ao;
+  }
+  const std::vector<Vec3>& v = layer == "ao"           ? f.ao_rgb
+                               : layer == "irradiance" ? f.irradiance
+                               : layer == "indirect"   ? f.indirect
+                                                       : f.farfield;
+  channels = 3;
+  scratch.resize(n * 3);
+  for (size_t i = 0; i < n; ++i)
+    scratch[3 * i] = v[i].x, scratch[3 * i + 1] = v[i].y, scratch[3 * i + 2] = v[i].z;
+  return scratch;
+}
+
+}  // namespace
+
+std::string shipped_ocio_config() {
+  std::error_code ec;
+  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+  const fs::path installed = exe.parent_path().parent_path() / "share/hbil/ocio/hbil.ocio";
+  if (!ec && fs::exists(installed)) return installed.string();
+  return HBIL_OCIO_CONFIG;
+}
+
+FrameOutput::FrameOutput(const OutputSettings& s, const SequenceJob& job)
+    : out_(s.output), p_(job.params()) {
+  const SequencePlan& plan = job.plan();
+  if (plan.frames.size() > 1 && !out_.is_sequence())
+    throw Error(Exit::usage, "-o " + s.output + ": a sequence of " +
+                                 std::to_string(plan.frames.size()) +
+                                 " frames needs an output frame pattern (e.g. out/frame_####.exr)");
+  for (int f : plan.frames) {
+    std::error_code ec;
+    if (fs::equivalent(plan.input.path(f), out_.path(f), ec))
+      throw Error(Exit::usage, "-o " + out_.path(f) + " would overwrite its own input");
+  }
+  // Without --display-out, a PNG of the composite (or of --display-layer) goes beside each
+  // EXR, unless --no-display.
+  display_layer_ = s.display_layer;
+  display_out_ = s.display_out;
+  if (display_out_.empty() && !s.no_display && (p_.wants("composite") || !display_layer_.empty()))
+    display_out_ = fs::path(s.output).replace_extension(".png").string();
+  if (!display_out_.empty() && s.no_display)
+    throw Error(Exit::usage, "--display-out and --no-display contradict each other");
+  if (!display_out_.empty()) {
+    if (!io::is_display_image_path(display_out_))
+      throw Error(Exit::usage,
+                  "--display-out " + display_out_ + ": use a .png, .jpg, .jpeg or .exr name");
+    if (display_layer_.empty())
+      display_layer_ = p_.wants("composite") ? "composite" : p_.outputs.front();
+    if (display_layer_ == "bentcone" || display_layer_ == "history" || !p_.wants(display_layer_))
+      throw Error(Exit::usage,
+                  "--display-layer " + display_layer_ +
+                      ": must be one of the computed colour layers (ao, irradiance, indirect, "
+                      "farfield, composite) named in outputs");
+    io::DisplaySettings d = s.display;
+    if (d.input_space.empty()) d.input_space = p_.input_space;
+    display_.emplace(d, shipped_ocio_config());
+    display_pattern_.emplace(display_out_);
+    if (plan.frames.size() > 1 && !display_pattern_->is_sequence())
+      throw Error(Exit::usage,
+                  "--display-out " + display_out_ + ": a sequence needs a frame pattern");
+    for (int f : plan.frames)
+      if (display_pattern_->path(f) == out_.path(f))
+        throw Error(Exit::usage, "--display-out " + display_out_ + " is the EXR output's name");
+  }
+  for (int f : plan.frames) {
+    batch_.expect(out_.path(f));
+    if (display_pattern_) batch_.expect(display_pattern_->path(f));
+  }
+}
+
+std::string FrameOutput::describe_display() const {
+  if (!display_) return "";
+  return display_out_ + " (" + display_layer_ + "): " + display_->describe();
+}
+
+void FrameOutput::write(const FrameResult& r) {
+  const std::string out_path = out_.path(r.frame);
+  // The display image is written beside the EXR, on a thread of its own (PNG's deflate runs
+  // on one core). Whatever either write leaves goes into the batch before an error is
+  // passed on, so that a failed run removes it.
+  std::future<std::string> shown;
+  const std::string shown_path = display_ ? display_pattern_->path(r.frame) : "";
+  if (display_)
+    shown = std::async(std::launch::async, [&] {
+      int channels = 0;
+      std::vector<float> scratch;
+      const std::vector<float>& px = display_pixels(r.outputs, display_layer_, channels, scratch);
+      return io::write_display_temporary(
+          shown_path, px, channels, r.outputs.width, r.outputs.height, *display_,
+          "hbil " + display_layer_ + ", frame " + std::to_string(r.frame));
+    });
+  std::exception_ptr failed;
+  try {
+    batch_.add(io::write_temporary(out_path, r.outputs, r.input->spec, p_, r.camera), out_path);
+  } catch (...) {
+    failed = std::current_exception();
+  }
+  if (shown.valid()) {
+    try {
+      batch_.add(shown.get(), shown_path);
+    } catch (...) {
+      if (!failed) failed = std::current_exception();
+    }
+  }
+  if (failed) std::rethrow_exception(failed);
+}
+
+}  // namespace hbil::pipeline

@@ -1,0 +1,197 @@
+// sequence_job.cpp: see sequence_job.h.
+#include "pipeline/sequence_job.h"
+
+#include <chrono>
+#include <future>
+#include <optional>
+#include <sstream>
+
+#include "hbil/error.h"
+
+namespace hbil::pipeline {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double ms(Clock::time_point a, Clock::time_point b) {
+  return std::chrono::duration<double, std::milli>(b - a).count();
+}
+
+}  // namespace
+
+std::set<int> parse_cut_frames(const std::string& text) {
+  std::set<int> cuts;
+  std::stringstream s(text);
+  std::string item;
+  while (std::getline(s, item, ',')) {
+    try {
+      size_t used = 0;
+      const int f = std::stoi(item, &used);
+      if (used != item.size() || f < 0) throw std::invalid_argument(item);
+      cuts.insert(f);
+    } catch (const std::exception&) {
+      throw Error(Exit::usage,
+                  "--cut-frames: \"" + item + "\" is not a frame number (expected e.g. 12,40)");
+    }
+  }
+  return cuts;
+}
+
+SequencePlan plan_sequence(const std::string& input, const std::string& frames, int preroll,
+                           const std::string& cut_frames) {
+  SequencePlan plan{io::FramePattern(input), {}, {}, {}};
+  if (!plan.input.is_sequence()) {
+    if (!frames.empty())
+      throw Error(Exit::usage,
+                  "--frames needs an input frame pattern, got the single file " + input);
+    plan.frames = {io::frame_number_from_name(input).value_or(0)};
+  } else if (!frames.empty()) {
+    const io::FrameRange r = io::parse_frame_range(frames);
+    for (int f = r.first; f <= r.last; ++f) plan.frames.push_back(f);
+  } else {
+    plan.frames = plan.input.existing_frames();
+    if (plan.frames.empty())
+      throw Error(Exit::input, input + ": no frames found matching the pattern");
+  }
+  if (preroll > 0) {
+    if (!plan.input.is_sequence())
+      throw Error(Exit::usage,
+                  "--preroll needs an input frame pattern, got the single file " + input);
+    const int first = plan.frames.front();
+    for (int f : plan.input.existing_frames())
+      if (f >= first - preroll && f < first) plan.preroll.push_back(f);
+  }
+  if (!cut_frames.empty()) plan.cuts = parse_cut_frames(cut_frames);
+  return plan;
+}
+
+Overlap parse_overlap(const std::string& text) {
+  if (text == "on") return Overlap::on;
+  if (text == "off") return Overlap::off;
+  if (text == "auto") return Overlap::automatic;
+  throw Error(Exit::usage, "--overlap " + text + ": expected on, off or auto");
+}
+
+SequenceJob::SequenceJob(SequencePlan plan, const Params& requested) : plan_(std::move(plan)) {
+  const int f = plan_.frames.front();
+  first_ = io::open_frame(plan_.input.path(f), f, requested);
+  p_ = io::resolve_outputs(first_, requested, &why_dropped_);
+}
+
+bool SequenceJob::overlaps(Overlap o) const {
+  return o == Overlap::on ||
+         (o == Overlap::automatic &&
+          size_t(first_.spec.width) * size_t(first_.spec.height) <= (size_t(1) << 22));
+}
+
+void SequenceJob::run(const Hooks& hooks, Overlap overlap_mode, const SH9* environment) const {
+  // A frame as read: header, fields and camera, with the time each took.
+  struct Loaded {
+    io::InputFrame in;
+    GBuffer g;
+    Camera cam;
+    double read_ms = 0, camera_ms = 0;
+  };
+  auto load = [this](int frame) {
+    const auto t0 = Clock::now();
+    Loaded l;
+    l.in = io::open_frame(plan_.input.path(frame), frame, p_);
+    // Colour fields stored as half stay half until the frame's geometry is done with.
+    l.g = io::read_fields(l.in, io::fields_needed(l.in, p_), p_, true);
+    const auto t_read = Clock::now();
+    l.cam = io::find_camera(l.in, l.g, p_);
+    l.read_ms = ms(t0, t_read);
+    l.camera_ms = ms(t_read, Clock::now());
+    return l;
+  };
+  // Pre-roll frames first (computed, not delivered), then the frames to deliver.
+  std::vector<int> order = plan_.preroll;
+  order.insert(order.end(), plan_.frames.begin(), plan_.frames.end());
+  const bool temporal = p_.temporal && order.size() > 1;
+  std::optional<TemporalChain> chain;
+  if (temporal) chain.emplace(p_);
+  const bool overlap = overlaps(overlap_mode);
+  // A delivered frame keeps its input header alive until its sink is done with it.
+  struct Delivery {
+    std::unique_ptr<io::InputFrame> input;
+    FrameResult result;
+  };
+  auto deliver = [&hooks](Delivery d) {
+    const auto t = Clock::now();
+    if (hooks.deliver) hooks.deliver(d.result);
+    d.result.times.deliver_ms = ms(t, Clock::now());
+    d.result.outputs = AoFrame{};
+    return d;
+  };
+  auto finish = [&hooks](std::future<Delivery>& f) {
+    Delivery d = f.get();
+    if (hooks.delivered) hooks.delivered(d.result);
+  };
+  std::future<Loaded> next = std::async(std::launch::async, load, order.front());
+  std::future<Delivery> delivering;  // the previous frame's
+  std::string first_path;
+  int width = 0, height = 0;
+  try {
+    for (size_t k = 0; k < order.size(); ++k) {
+      const auto t0 = Clock::now();
+      const int frame = order[k];
+      const bool preroll = k < plan_.preroll.size();
+      Loaded cur = next.get();
+      auto read_next = [&] {
+        if (k + 1 < order.size()) next = std::async(std::launch::async, load, order[k + 1]);
+      };
+      if (overlap) read_next();
+      const io::InputFrame& in = cur.in;
+      if (k == 0) {
+        width = in.spec.width;
+        height = in.spec.height;
+        first_path = in.path;
+      } else if (in.spec.width != width || in.spec.height != height) {
+        throw Error(Exit::bad_data, in.where() + ": resolution " + std::to_string(in.spec.width) +
+                                        "x" + std::to_string(in.spec.height) + " differs from " +
+                                        std::to_string(width) + "x" + std::to_string(height) +
+                                        " of " + first_path);
+      }
+      const auto t_compute = Clock::now();
+      TemporalReport rep;
+      AoFrame result = chain ? chain->process(std::move(cur.g), cur.cam, frame,
+                                              plan_.cuts.count(frame) > 0, environment, &rep)
+                             : (cur.g.unpack(), compute_ao_frame(cur.g, cur.cam, p_, environment));
+      const double compute_ms = ms(t_compute, Clock::now());
+      if (!overlap && preroll) read_next();
+      if (rep.cut && hooks.cut) hooks.cut(frame, rep);
+      if (preroll) {
+        if (hooks.preroll_done)
+          hooks.preroll_done(frame, k + 1, plan_.preroll.size(),
+                             std::chrono::duration<double>(Clock::now() - t0).count());
+        continue;
+      }
+      Delivery d{std::make_unique<io::InputFrame>(std::move(cur.in)), {}};
+      FrameResult& r = d.result;
+      r.frame = frame;
+      r.index = k + 1 - plan_.preroll.size();
+      r.input = d.input.get();
+      r.camera = cur.cam;
+      r.outputs = std::move(result);
+      r.report = rep;
+      r.temporal = bool(chain);
+      r.times = {cur.read_ms, cur.camera_ms, compute_ms, 0};
+      r.started = t0;
+      if (delivering.valid()) finish(delivering);  // the previous frame's
+      delivering = std::async(std::launch::async, deliver, std::move(d));
+      if (!overlap) {
+        finish(delivering);
+        read_next();
+      }
+    }
+    if (delivering.valid()) finish(delivering);
+  } catch (...) {
+    // Nothing may still be running on this job's data when the error leaves it.
+    if (delivering.valid()) delivering.wait();
+    if (next.valid()) next.wait();
+    throw;
+  }
+}
+
+}  // namespace hbil::pipeline

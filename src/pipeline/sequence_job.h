@@ -1,0 +1,100 @@
+// sequence_job.h: one run over a sequence, the loop that `hbil run` and `hbil bench` drive.
+// Frames are planned (the frames to deliver, the pre-roll before them, the cuts), then each
+// is read, its camera found, computed (through the temporal chain when the preset has one)
+// and handed to a sink, with the time each stage took.
+//
+// With the overlap, frame k+1 is read and frame k−1 delivered while frame k computes (three
+// frames in memory); without it each frame is read, computed and delivered in turn (one
+// frame in memory). Each stage keeps the frame order, so the results are the same either
+// way and for any thread count.
+#pragma once
+
+#include <chrono>
+#include <functional>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "hbil/ao_frame.h"
+#include "hbil/params.h"
+#include "hbil/temporal.h"
+#include "io/exr_frame.h"
+#include "io/sequence.h"
+
+namespace hbil::pipeline {
+
+struct SequencePlan {
+  io::FramePattern input{""};
+  std::vector<int> frames;   // delivered, in order
+  std::vector<int> preroll;  // computed before them, not delivered
+  std::set<int> cuts;        // frames that start a new shot (history dropped)
+};
+
+// "12,40" -> {12, 40}. Throws Error(Exit::usage, "--cut-frames: ...").
+std::set<int> parse_cut_frames(const std::string& text);
+
+// The frames of `input` (a pattern or one file): `frames` "A-B" or "N", or every frame found
+// when empty; `preroll` P: the frames that exist in [first − P, first − 1]; `cut_frames` as
+// parse_cut_frames. Throws Error(Exit::usage) for options that do not fit the input and
+// Error(Exit::input) for a pattern that matches nothing.
+SequencePlan plan_sequence(const std::string& input, const std::string& frames, int preroll,
+                           const std::string& cut_frames);
+
+struct FrameTimes {
+  double read_ms = 0, camera_ms = 0, compute_ms = 0, deliver_ms = 0;
+};
+
+// A computed frame, as the sink gets it.
+struct FrameResult {
+  int frame = 0;
+  size_t index = 0;  // 1-based among the delivered frames
+  const io::InputFrame* input = nullptr;
+  Camera camera;
+  AoFrame outputs;
+  TemporalReport report;
+  bool temporal = false;                          // computed by the temporal chain
+  FrameTimes times;                               // deliver_ms is filled after the sink returns
+  std::chrono::steady_clock::time_point started;  // when its computation began
+};
+
+enum class Overlap { on, off, automatic };
+
+// "on", "off", "auto".
+Overlap parse_overlap(const std::string& text);
+
+class SequenceJob {
+ public:
+  // Opens the first frame and resolves outputs "auto" on its header: every frame then
+  // computes the same layers, and a later frame that lacks a pass is an error.
+  SequenceJob(SequencePlan plan, const Params& requested);
+
+  const SequencePlan& plan() const { return plan_; }
+  const Params& params() const { return p_; }
+  const io::InputFrame& first() const { return first_; }
+  // The missing-pass message of the first "auto" output left out ("" when none was).
+  const std::string& why_dropped() const { return why_dropped_; }
+  // Whether run() overlaps: "auto" does up to 2^22 pixels (2560x1440).
+  bool overlaps(Overlap o) const;
+
+  struct Hooks {
+    // Each delivered frame, in order, on a thread of its own (with the overlap, beside the
+    // next frame's computation). May throw: the run stops and the exception is passed on.
+    std::function<void(FrameResult&)> deliver;
+    // After each delivery, on the calling thread, in order.
+    std::function<void(const FrameResult&)> delivered;
+    // A cut, on the calling thread.
+    std::function<void(int frame, const TemporalReport&)> cut;
+    // A pre-roll frame computed: its number, k of n, seconds.
+    std::function<void(int frame, size_t k, size_t n, double seconds)> preroll_done;
+  };
+  void run(const Hooks& hooks, Overlap overlap = Overlap::automatic,
+           const SH9* environment = nullptr) const;
+
+ private:
+  SequencePlan plan_;
+  io::InputFrame first_;
+  Params p_;
+  std::string why_dropped_;
+};
+
+}  // namespace hbil::pipeline
