@@ -24,7 +24,11 @@ struct ParamOptions {
   Params load() const;
 };
 
+// Defaults, then the keys of a JSON preset file. Throws Error(Exit::preset).
+Params read_preset(const std::string& path);
+
 void add_run(CLI::App& app);
+void add_bench(CLI::App& app);
 void add_info(CLI::App& app);
 void add_compare(CLI::App& app);
 void add_preset(CLI::App& app);

@@ -23,19 +23,21 @@ void ParamOptions::add_to(CLI::App& app) {
                   ->default_str(std::to_string(d.steps));
 }
 
+Params read_preset(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw Error(Exit::preset, path + ": cannot read");
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(in);
+  } catch (const nlohmann::json::parse_error& e) {
+    throw Error(Exit::preset, path + ": not valid JSON: " + e.what());
+  }
+  return params_from_json(j, path);
+}
+
 Params ParamOptions::load() const {
   Params p;
-  if (!preset.empty()) {
-    std::ifstream in(preset);
-    if (!in) throw Error(Exit::preset, preset + ": cannot read");
-    nlohmann::json j;
-    try {
-      j = nlohmann::json::parse(in);
-    } catch (const nlohmann::json::parse_error& e) {
-      throw Error(Exit::preset, preset + ": not valid JSON: " + e.what());
-    }
-    p = params_from_json(j, preset);
-  }
+  if (!preset.empty()) p = read_preset(preset);
   // The shorthands apply before the --set list, so an explicit --set wins.
   if (radius_opt->count()) p = apply_set(p, "radius=" + nlohmann::json(radius).dump());
   if (slices_opt->count()) p = apply_set(p, "slices=" + std::to_string(slices));

@@ -1,0 +1,120 @@
+// bench.cpp: `hbil bench SHOT -o DIR --ref LAYER=PATTERN:EXPR ...`: speed against accuracy
+// on the user's own shot (pipeline/bench.h).
+#include <tbb/global_control.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <memory>
+
+#include "cli/commands.h"
+#include "hbil/error.h"
+#include "pipeline/bench.h"
+
+namespace hbil::cli {
+
+namespace {
+
+struct BenchOptions {
+  std::string shot, out_dir, frames, mask = "auto";
+  std::vector<std::string> presets, sets, sweeps, refs, renders;
+  int runs = 1, threads = 0;
+  bool quiet = false;
+};
+
+void bench(const BenchOptions& o) {
+  pipeline::BenchSettings s;
+  s.shot = o.shot;
+  s.frames = o.frames;
+  s.runs = o.runs;
+  s.mask.mask = o.mask;
+  for (const std::string& r : o.refs) s.refs.push_back(pipeline::parse_bench_reference(r));
+  for (const std::string& r : o.renders) s.renders.push_back(pipeline::parse_bench_render(r));
+  std::vector<pipeline::BenchConfig> bases;
+  auto with_sets = [&](Params p) {
+    for (const std::string& set : o.sets) p = apply_set(p, set);
+    return p;
+  };
+  if (o.presets.empty()) bases.push_back({"default", with_sets(Params{})});
+  for (const std::string& f : o.presets)
+    bases.push_back({std::filesystem::path(f).stem().string(), with_sets(read_preset(f))});
+  s.configs = pipeline::expand_sweeps(bases, o.sweeps);
+  s.mask.background_depth = s.configs.front().params.background_depth;
+  std::unique_ptr<tbb::global_control> threads;
+  if (o.threads > 0)
+    threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
+                                                    o.threads);
+  const pipeline::BenchResult r = pipeline::run_bench(s, [&](const std::string& line) {
+    if (!o.quiet) std::cerr << "hbil: " << line << "\n";
+  });
+  pipeline::write_bench(r, o.out_dir);
+  // The table: a row per configuration; per layer its PSNR, * on the Pareto front.
+  std::printf("%-32s %9s", "configuration", "s/frame");
+  for (const std::string& l : r.layers) std::printf(" %12s", (l + " dB").c_str());
+  if (!r.renders.empty()) std::printf(" %14s", "speedup");
+  std::printf("\n");
+  for (const pipeline::ConfigResult& c : r.configs) {
+    std::printf("%-32s %9.3f", c.name.c_str(), c.seconds_per_frame);
+    for (const std::string& l : r.layers)
+      std::printf(" %11.2f%s", c.errors.at(l).psnr(), c.pareto.at(l) ? "*" : " ");
+    if (!r.renders.empty()) {
+      char b[32];
+      std::snprintf(b, sizeof b, "%s%.1fx", c.speedup_bound.c_str(), c.speedup);
+      std::printf(" %14s", c.speedup > 0 ? b : "-");
+    }
+    std::printf("\n");
+  }
+  for (const pipeline::RenderResult& x : r.renders)
+    std::printf("%-32s %9.3f %11.2f  (render, %d samples)\n", x.pattern.c_str(),
+                x.seconds_per_frame, x.error.psnr(), x.samples);
+  std::printf("* on the layer's Pareto front; %s; written to %s (bench.json, bench.csv, "
+              "chart.svg, chart.png)\n",
+              r.machine.c_str(), o.out_dir.c_str());
+}
+
+}  // namespace
+
+void add_bench(CLI::App& app) {
+  auto o = std::make_shared<BenchOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "bench", "speed against accuracy of presets and parameter sweeps on a shot, with a chart");
+  cmd->add_option("SHOT", o->shot, "input EXR frame pattern (or one file), as for run")
+      ->required();
+  cmd->add_option("-o,--output", o->out_dir,
+                  "folder for bench.json, bench.csv, chart.svg and chart.png")
+      ->required();
+  cmd->add_option("--ref", o->refs,
+                  "LAYER=PATTERN:EXPRESSION: a layer's reference, e.g. "
+                  "ao='ref/frame_####.exr:AO', indirect='ref/frame_####.exr:DiffCol*DiffInd'; "
+                  "repeatable, at least one")
+      ->required();
+  cmd->add_option("--render", o->renders,
+                  "PATTERN[:EXPRESSION]: a path-traced render of the frames (default "
+                  "expression Combined) with its render time in the header; repeatable (one "
+                  "per sample count); needs --ref composite=...")
+      ->allow_extra_args(false);
+  cmd->add_option("--frames", o->frames, "frame range A-B or one frame N (default: all found)");
+  cmd->add_option("--preset", o->presets,
+                  "a configuration from this preset file; repeatable (default: the defaults)")
+      ->check(CLI::ExistingFile)
+      ->allow_extra_args(false);
+  cmd->add_option("--set", o->sets, "key=value applied to every configuration, as in run")
+      ->allow_extra_args(false);
+  cmd->add_option("--sweep", o->sweeps,
+                  "key=v1,v2,...: every configuration with each value; repeatable (the "
+                  "combinations of all sweeps)")
+      ->allow_extra_args(false);
+  cmd->add_option("--runs", o->runs, "timed runs per configuration, alternated (medians)")
+      ->default_val(1)
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--mask", o->mask,
+                  "valid pixels: auto (reference depth, else alpha), none, or a channel name")
+      ->capture_default_str();
+  cmd->add_option("--threads", o->threads, "worker threads (0 = all cores)")
+      ->default_val(0)
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_flag("-q,--quiet", o->quiet, "no progress lines");
+  cmd->callback([o] { bench(*o); });
+}
+
+}  // namespace hbil::cli

@@ -1,0 +1,108 @@
+// bench.h: speed against accuracy on a user's own shot (`hbil bench`). Each configuration
+// (a preset with --set and --sweep values) runs over the frames as `hbil run` would; each
+// delivered frame's layers are compared with references (layer expressions over reference
+// files), and the stages are timed. Renders of the same frames at several sample counts,
+// with the render time their header records, give the path tracer's curve on the same axes
+// and the equal-error speedup: the renderer's time at a configuration's composite error
+// (interpolated on its curve) over the configuration's time.
+#pragma once
+
+#include <functional>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "hbil/error_stats.h"
+#include "hbil/params.h"
+#include "io/layer_expr.h"
+
+namespace hbil::pipeline {
+
+// --ref LAYER=PATTERN:EXPR: hbil's layer LAYER against EXPR over the files of PATTERN (frame
+// pattern or one file).
+struct BenchReference {
+  std::string layer, pattern, expr;
+};
+// Throws Error(Exit::usage) naming the option.
+BenchReference parse_bench_reference(const std::string& text);
+
+// --render PATTERN[:EXPR]: a path-traced render of the same frames (EXPR, default
+// "Combined", compared with the composite's reference).
+struct BenchRender {
+  std::string pattern, expr = "Combined";
+};
+BenchRender parse_bench_render(const std::string& text);
+
+// Blender's render time, "MM:SS.ss" or "HH:MM:SS.ss" (cycles.<ViewLayer>.render_time), or
+// plain seconds, in seconds; negative when the text is none of these.
+double parse_render_time(const std::string& text);
+
+struct BenchConfig {
+  std::string name;
+  Params params;
+};
+
+// The configurations: each base (name, parameters) for every combination of the sweeps
+// ("key=v1,v2,..."; values as --set takes them), named "<base> key=v ...". Throws
+// Error(Exit::usage) for a malformed sweep, Error(Exit::preset) for a value --set refuses.
+std::vector<BenchConfig> expand_sweeps(const std::vector<BenchConfig>& bases,
+                                       const std::vector<std::string>& sweeps);
+
+struct BenchSettings {
+  std::string shot;    // input frame pattern or one file
+  std::string frames;  // "A-B", "N" or "" (every frame)
+  std::vector<BenchConfig> configs;
+  std::vector<BenchReference> refs;
+  std::vector<BenchRender> renders;
+  int runs = 1;  // timed runs per configuration, alternated; medians reported
+  io::MaskSpec mask;
+};
+
+struct StageTimes {
+  double read_ms = 0, camera_ms = 0, compute_ms = 0, write_ms = 0;
+};
+
+struct ConfigResult {
+  std::string name;
+  Params params;
+  StageTimes times;                 // medians over frames and runs
+  std::vector<double> run_seconds;  // each run's wall clock per frame
+  double seconds_per_frame = 0;     // median of run_seconds
+  std::map<std::string, ErrorStats> errors;          // layer -> over all frames
+  std::map<std::string, std::vector<double>> psnr;   // layer -> per frame
+  std::map<std::string, bool> pareto;                // layer -> on that layer's front
+  double speedup = 0;       // the render's time at equal composite error / ours; 0: none
+  std::string speedup_bound;  // "" (interpolated), ">" or "<" (beyond the render curve)
+};
+
+struct RenderResult {
+  std::string pattern;
+  int samples = 0;
+  double seconds_per_frame = 0;  // the header's render time, mean over frames
+  ErrorStats error;              // against the composite's reference
+};
+
+struct BenchResult {
+  std::string shot;
+  std::vector<int> frames;
+  std::vector<std::string> layers;  // in --ref order
+  std::vector<ConfigResult> configs;
+  std::vector<RenderResult> renders;  // by render time
+  std::string machine;                // cores, load
+};
+
+// Measures every configuration's errors (one run, untimed), then times it `runs` times,
+// alternating the configurations, as `hbil run --no-display` computing the layers judged
+// (the EXRs are written to a scratch folder and removed). `progress` gets a line per run. Throws hbil::Error as `hbil run` and `hbil compare` do.
+BenchResult run_bench(const BenchSettings& s,
+                      const std::function<void(const std::string&)>& progress = {});
+
+// The configurations that no other beats on both time and PSNR of `layer`.
+void mark_pareto(BenchResult& r);
+// Speedups at equal composite error against the render curve.
+void equal_error_speedups(BenchResult& r);
+
+// DIR/bench.json, DIR/bench.csv, DIR/chart.svg, DIR/chart.png. Throws Error(Exit::output).
+void write_bench(const BenchResult& r, const std::string& dir);
+
+}  // namespace hbil::pipeline

@@ -1,0 +1,206 @@
+// bench_test.cpp: `hbil bench` (pipeline/bench.h): option parsing, sweeps, the Pareto front
+// and the equal-error speedup on made-up results with known answers, and a run on the
+// room_poles sample whose errors must equal `hbil compare`'s on `hbil run`'s output.
+
+#include "pipeline/bench.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "hbil/error.h"
+#include "test_util.h"
+
+namespace hbil {
+namespace {
+
+using pipeline::BenchResult;
+using pipeline::ConfigResult;
+using pipeline::RenderResult;
+using test::contains;
+using test::expect_error;
+namespace fs = std::filesystem;
+
+// Statistics with a given MSE (so PSNR = -10 log10(mse)).
+ErrorStats with_mse(double mse) {
+  ErrorStats s;
+  s.sum_sq = mse * 100;
+  s.count = 100;
+  return s;
+}
+
+ConfigResult config(const std::string& name, double seconds, double psnr) {
+  ConfigResult c;
+  c.name = name;
+  c.seconds_per_frame = seconds;
+  c.errors["composite"] = with_mse(std::pow(10.0, -psnr / 10));
+  return c;
+}
+
+TEST(BenchOptions, ReferenceIsLayerPatternAndExpression) {
+  const auto r = pipeline::parse_bench_reference("indirect=ref/f_####.exr:DiffCol*DiffInd");
+  EXPECT_EQ(r.layer, "indirect");
+  EXPECT_EQ(r.pattern, "ref/f_####.exr");
+  EXPECT_EQ(r.expr, "DiffCol*DiffInd");
+  // The last colon separates the expression: a path may hold colons.
+  const auto c = pipeline::parse_bench_reference("ao=a:b/f.exr:AO");
+  EXPECT_EQ(c.pattern, "a:b/f.exr");
+  EXPECT_EQ(c.expr, "AO");
+  for (const char* bad : {"ao", "ao=f.exr", "=f.exr:AO", "ao=f.exr:", "ao=:AO"})
+    expect_error([&] { pipeline::parse_bench_reference(bad); }, Exit::usage, {"--ref"});
+  expect_error([] { pipeline::parse_bench_reference("glow=f.exr:AO"); }, Exit::usage,
+               {"'glow' is not one of hbil's layers"});
+  expect_error([] { pipeline::parse_bench_reference("ao=f.exr:AO*(B"); }, Exit::usage,
+               {"missing ')'"});
+}
+
+TEST(BenchOptions, RenderPatternAndExpression) {
+  EXPECT_EQ(pipeline::parse_bench_render("r/spp8/f_####.exr").expr, "Combined");
+  const auto r = pipeline::parse_bench_render("r/spp8/f_####.exr:Image");
+  EXPECT_EQ(r.pattern, "r/spp8/f_####.exr");
+  EXPECT_EQ(r.expr, "Image");
+}
+
+TEST(BenchOptions, RenderTimeAsBlenderWritesIt) {
+  EXPECT_DOUBLE_EQ(pipeline::parse_render_time("01:21.59"), 81.59);
+  EXPECT_DOUBLE_EQ(pipeline::parse_render_time("00:00.06"), 0.06);
+  EXPECT_DOUBLE_EQ(pipeline::parse_render_time("1:02:03.5"), 3723.5);
+  EXPECT_DOUBLE_EQ(pipeline::parse_render_time("2.25"), 2.25);
+  for (const char* bad : {"", "abc", "01:xx", "-1", "1::2"})
+    EXPECT_LT(pipeline::parse_render_time(bad), 0) << bad;
+}
+
+TEST(BenchSweeps, EveryCombinationNamedAndApplied) {
+  const auto c = pipeline::expand_sweeps({{"default", Params{}}},
+                                         {"slices=1,2,4", "method=\"horizon\",\"bitmask\""});
+  ASSERT_EQ(c.size(), 6u);
+  EXPECT_EQ(c[0].name, "default slices=1 method=\"horizon\"");
+  EXPECT_EQ(c[5].name, "default slices=4 method=\"bitmask\"");
+  EXPECT_EQ(c[2].params.slices, 2);
+  EXPECT_EQ(c[2].params.method, "horizon");
+  EXPECT_EQ(c[5].params.slices, 4);
+  EXPECT_EQ(c[5].params.method, "bitmask");
+  // Commas inside brackets belong to the value.
+  const auto o = pipeline::expand_sweeps({{"d", Params{}}},
+                                         {"outputs=[\"ao\",\"bentcone\"],[\"ao\"]"});
+  ASSERT_EQ(o.size(), 2u);
+  EXPECT_EQ(o[0].params.outputs, (std::vector<std::string>{"ao", "bentcone"}));
+  EXPECT_EQ(o[1].params.outputs, (std::vector<std::string>{"ao"}));
+  expect_error([] { pipeline::expand_sweeps({{"d", Params{}}}, {"slices"}); }, Exit::usage,
+               {"--sweep slices", "key=v1,v2"});
+  expect_error([] { pipeline::expand_sweeps({{"d", Params{}}}, {"slices=1,,2"}); }, Exit::usage,
+               {"empty value"});
+  expect_error([] { pipeline::expand_sweeps({{"d", Params{}}}, {"no_such_key=1"}); },
+               Exit::preset, {"no_such_key"});
+}
+
+TEST(BenchPareto, DominatedConfigurationsAreOffTheFront) {
+  BenchResult r;
+  r.layers = {"composite"};
+  r.configs = {config("a", 1.0, 20), config("b", 2.0, 25), config("c", 3.0, 24),
+               config("d", 0.5, 18), config("e", 1.0, 19)};
+  pipeline::mark_pareto(r);
+  EXPECT_TRUE(r.configs[0].pareto["composite"]);   // fastest at 20 dB
+  EXPECT_TRUE(r.configs[1].pareto["composite"]);   // the most accurate
+  EXPECT_FALSE(r.configs[2].pareto["composite"]);  // slower and worse than b
+  EXPECT_TRUE(r.configs[3].pareto["composite"]);   // the fastest
+  EXPECT_FALSE(r.configs[4].pareto["composite"]);  // as fast as a, worse
+}
+
+TEST(BenchSpeedup, LogTimeInterpolatedOnTheRenderCurve) {
+  BenchResult r;
+  r.layers = {"composite"};
+  r.configs = {config("mid", 0.1, 21.5), config("above", 0.1, 30), config("below", 0.1, 10)};
+  for (auto [t, p] : {std::pair{2.0, 23.0}, std::pair{1.0, 20.0}}) {
+    RenderResult x;
+    x.seconds_per_frame = t;
+    x.error = with_mse(std::pow(10.0, -p / 10));
+    r.renders.push_back(x);
+  }
+  pipeline::equal_error_speedups(r);
+  // Half way from 20 to 23 dB: sqrt(1 * 2) s, over 0.1 s.
+  EXPECT_NEAR(r.configs[0].speedup, 10 * std::sqrt(2.0), 1e-9);
+  EXPECT_EQ(r.configs[0].speedup_bound, "");
+  // Beyond the curve: a bound at its end.
+  EXPECT_NEAR(r.configs[1].speedup, 20.0, 1e-9);
+  EXPECT_EQ(r.configs[1].speedup_bound, ">");
+  EXPECT_NEAR(r.configs[2].speedup, 10.0, 1e-9);
+  EXPECT_EQ(r.configs[2].speedup_bound, "<");
+}
+
+// The bench's errors are `hbil compare`'s: ao (32-bit in the file) to 1e-9 dB; composite
+// (half in the file) within 0.01 dB, on R, G, B.
+TEST(BenchRun, ErrorsEqualCompareOnRunOutput) {
+  test::TempDir dir(test::test_name());
+  const std::string in = test::kRoomPoles + "/frame_####.exr";
+  const auto b = test::run_hbil("bench " + test::q(in) + " -o " + test::q(dir / "bench") +
+                                    " --frames 1-2 --ref " + test::q("ao=" + in + ":AO") +
+                                    " --ref " + test::q("composite=" + in + ":Combined") +
+                                    " --preset " + test::q(test::kSourceDir + "/presets/fast.json") +
+                                    " --sweep slices=1,2 -q",
+                                dir.path());
+  ASSERT_EQ(b.code, 0) << b.err;
+  EXPECT_TRUE(contains(b.out, "fast slices=1")) << b.out;
+  std::ifstream jf(dir / "bench/bench.json");
+  const nlohmann::json j = nlohmann::json::parse(jf);
+  ASSERT_EQ(j["configurations"].size(), 2u);
+  EXPECT_EQ(j["frames"], nlohmann::json({1, 2}));
+  for (const auto* f : {"bench.csv", "chart.svg", "chart.png"})
+    EXPECT_TRUE(fs::exists(dir / ("bench/" + std::string(f)))) << f;
+  auto png = OIIO::ImageInput::open(dir / "bench/chart.png");
+  ASSERT_TRUE(png);
+  EXPECT_EQ(png->spec().width, 2 * 560);  // a panel per layer
+  std::ifstream sf(dir / "bench/chart.svg");
+  const std::string svg((std::istreambuf_iterator<char>(sf)), {});
+  EXPECT_TRUE(contains(svg, "fast slices=2"));
+
+  const nlohmann::json& c = j["configurations"][1];
+  ASSERT_EQ(c["name"], "fast slices=2");
+  const auto run = test::run_hbil("run " + test::q(in) + " --frames 1-2 -o " +
+                                      test::q(dir / "out/f_####.exr") + " --preset " +
+                                      test::q(test::kSourceDir + "/presets/fast.json") +
+                                      " --set slices=2 --set 'outputs=[\"ao\",\"composite\"]' "
+                                      "--no-display -q",
+                                  dir.path());
+  ASSERT_EQ(run.code, 0) << run.err;
+  auto compare = [&](const std::string& layer, const std::string& ref) {
+    const auto r = test::run_hbil("compare " + test::q(dir / "out/f_####.exr") + " " + test::q(in) +
+                                      " --layer " + layer + " --ref-layer " + ref + " --json",
+                                  dir.path());
+    EXPECT_EQ(r.code, 0) << r.err;
+    return nlohmann::json::parse(r.out);
+  };
+  const nlohmann::json ao = compare("ao", "AO");
+  EXPECT_NEAR(c["layers"]["ao"]["psnr"].get<double>(), ao["overall"]["psnr"].get<double>(), 1e-9);
+  EXPECT_EQ(c["layers"]["ao"]["pixels"], ao["overall"]["pixels"]);
+  // compare averages in alpha; R, G, B alone from its channel table.
+  const nlohmann::json comp = compare("composite", "Combined");
+  double sq = 0;
+  size_t n = 0;
+  for (const auto& ch : comp["channels"])
+    if (!contains(ch["test"].get<std::string>(), ".A")) {
+      const double rmse = ch["rmse"].get<double>();
+      sq += rmse * rmse * ch["pixels"].get<double>();
+      n += ch["pixels"].get<size_t>();
+    }
+  const double rgb_psnr = -10 * std::log10(sq / double(n));
+  EXPECT_NEAR(c["layers"]["composite"]["psnr"].get<double>(), rgb_psnr, 0.01);
+  EXPECT_GT(c["seconds_per_frame"].get<double>(), 0);
+}
+
+TEST(BenchRun, RenderWithoutCompositeReferenceIsUsageError) {
+  test::TempDir dir(test::test_name());
+  const std::string in = test::kRoomPoles + "/frame_####.exr";
+  const auto b = test::run_hbil("bench " + test::q(in) + " -o " + test::q(dir / "b") +
+                                    " --frames 1 --ref " + test::q("ao=" + in + ":AO") +
+                                    " --render " + test::q(in) + " -q",
+                                dir.path());
+  EXPECT_EQ(b.code, int(Exit::usage)) << b.err;
+  EXPECT_TRUE(contains(b.err, "--ref composite")) << b.err;
+  EXPECT_FALSE(fs::exists(dir / "b"));
+}
+
+}  // namespace
+}  // namespace hbil
