@@ -83,17 +83,26 @@ TEST(BenchSweeps, EveryCombinationNamedAndApplied) {
   EXPECT_EQ(c[5].params.slices, 4);
   EXPECT_EQ(c[5].params.method, "bitmask");
   // Commas inside brackets belong to the value.
-  const auto o = pipeline::expand_sweeps({{"d", Params{}}},
-                                         {"outputs=[\"ao\",\"bentcone\"],[\"ao\"]"});
+  const auto o =
+      pipeline::expand_sweeps({{"d", Params{}}}, {"outputs=[\"ao\",\"bentcone\"],[\"ao\"]"});
   ASSERT_EQ(o.size(), 2u);
   EXPECT_EQ(o[0].params.outputs, (std::vector<std::string>{"ao", "bentcone"}));
   EXPECT_EQ(o[1].params.outputs, (std::vector<std::string>{"ao"}));
-  expect_error([] { pipeline::expand_sweeps({{"d", Params{}}}, {"slices"}); }, Exit::usage,
-               {"--sweep slices", "key=v1,v2"});
-  expect_error([] { pipeline::expand_sweeps({{"d", Params{}}}, {"slices=1,,2"}); }, Exit::usage,
-               {"empty value"});
-  expect_error([] { pipeline::expand_sweeps({{"d", Params{}}}, {"no_such_key=1"}); },
-               Exit::preset, {"no_such_key"});
+  expect_error(
+      [] {
+        pipeline::expand_sweeps({{"d", Params{}}}, {"slices"});
+      },
+      Exit::usage, {"--sweep slices", "key=v1,v2"});
+  expect_error(
+      [] {
+        pipeline::expand_sweeps({{"d", Params{}}}, {"slices=1,,2"});
+      },
+      Exit::usage, {"empty value"});
+  expect_error(
+      [] {
+        pipeline::expand_sweeps({{"d", Params{}}}, {"no_such_key=1"});
+      },
+      Exit::preset, {"no_such_key"});
 }
 
 TEST(BenchPareto, DominatedConfigurationsAreOffTheFront) {
@@ -135,12 +144,12 @@ TEST(BenchSpeedup, LogTimeInterpolatedOnTheRenderCurve) {
 TEST(BenchRun, ErrorsEqualCompareOnRunOutput) {
   test::TempDir dir(test::test_name());
   const std::string in = test::kRoomPoles + "/frame_####.exr";
-  const auto b = test::run_hbil("bench " + test::q(in) + " -o " + test::q(dir / "bench") +
-                                    " --frames 1-2 --ref " + test::q("ao=" + in + ":AO") +
-                                    " --ref " + test::q("composite=" + in + ":Combined") +
-                                    " --preset " + test::q(test::kSourceDir + "/presets/fast.json") +
-                                    " --sweep slices=1,2 -q",
-                                dir.path());
+  const auto b = test::run_hbil(
+      "bench " + test::q(in) + " -o " + test::q(dir / "bench") + " --frames 1-2 --ref " +
+          test::q("ao=" + in + ":AO") + " --ref " + test::q("composite=" + in + ":Combined") +
+          " --preset " + test::q(test::kSourceDir + "/presets/fast.json") +
+          " --sweep slices=1,2 -q",
+      dir.path());
   ASSERT_EQ(b.code, 0) << b.err;
   EXPECT_TRUE(contains(b.out, "fast slices=1")) << b.out;
   std::ifstream jf(dir / "bench/bench.json");
@@ -158,12 +167,12 @@ TEST(BenchRun, ErrorsEqualCompareOnRunOutput) {
 
   const nlohmann::json& c = j["configurations"][1];
   ASSERT_EQ(c["name"], "fast slices=2");
-  const auto run = test::run_hbil("run " + test::q(in) + " --frames 1-2 -o " +
-                                      test::q(dir / "out/f_####.exr") + " --preset " +
-                                      test::q(test::kSourceDir + "/presets/fast.json") +
-                                      " --set slices=2 --set 'outputs=[\"ao\",\"composite\"]' "
-                                      "--no-display -q",
-                                  dir.path());
+  const auto run =
+      test::run_hbil("run " + test::q(in) + " --frames 1-2 -o " + test::q(dir / "out/f_####.exr") +
+                         " --preset " + test::q(test::kSourceDir + "/presets/fast.json") +
+                         " --set slices=2 --set 'outputs=[\"ao\",\"composite\"]' "
+                         "--no-display -q",
+                     dir.path());
   ASSERT_EQ(run.code, 0) << run.err;
   auto compare = [&](const std::string& layer, const std::string& ref) {
     const auto r = test::run_hbil("compare " + test::q(dir / "out/f_####.exr") + " " + test::q(in) +
@@ -193,10 +202,10 @@ TEST(BenchRun, ErrorsEqualCompareOnRunOutput) {
 TEST(BenchRun, RenderWithoutCompositeReferenceIsUsageError) {
   test::TempDir dir(test::test_name());
   const std::string in = test::kRoomPoles + "/frame_####.exr";
-  const auto b = test::run_hbil("bench " + test::q(in) + " -o " + test::q(dir / "b") +
-                                    " --frames 1 --ref " + test::q("ao=" + in + ":AO") +
-                                    " --render " + test::q(in) + " -q",
-                                dir.path());
+  const auto b =
+      test::run_hbil("bench " + test::q(in) + " -o " + test::q(dir / "b") + " --frames 1 --ref " +
+                         test::q("ao=" + in + ":AO") + " --render " + test::q(in) + " -q",
+                     dir.path());
   EXPECT_EQ(b.code, int(Exit::usage)) << b.err;
   EXPECT_TRUE(contains(b.err, "--ref composite")) << b.err;
   EXPECT_FALSE(fs::exists(dir / "b"));

@@ -23,6 +23,9 @@
 
 #include "hbil/error.h"
 #include "hbil/params.h"
+#include "hbil/scene_scale.h"
+#include "io/camera_io.h"
+#include "io/exr_frame.h"
 #include "test_util.h"
 
 namespace hbil {
@@ -142,9 +145,19 @@ TEST_F(Cli, RunWritesLayersAndMetadata) {
     // Metadata: the effective preset, the version, the camera, the input's stamp.
     // Metadata holds the preset as run, "auto" resolved, so that it reproduces the file.
     const json preset = json::parse(px.spec.get_string_attribute("hbil:preset"));
+    // gather_radius and thickness "auto" from the first frame (scene_scale.h).
     Params as_run;
     as_run.outputs = auto_outputs();
+    {
+      const io::InputFrame f1 = io::open_frame(test::kRoomPoles + "/frame_0001.exr", 1, as_run);
+      GBuffer g = io::read_fields(f1, {"depth"}, as_run);
+      as_run =
+          resolve_scene_params(as_run, measure_scene(g, io::find_camera(f1, g, as_run), as_run));
+    }
     EXPECT_EQ(preset, to_json(as_run));
+    EXPECT_NEAR(preset["gather_radius"].get<double>(), 5.37, 0.01);  // 256 px x 2.99 m / 142.2 px
+    EXPECT_EQ(preset["thickness"], 0.4);  // 0.15 x 2.99 m, at most 0.4 x radius
+    EXPECT_NEAR(preset["gather_thickness"].get<double>(), 0.15 * 2.986, 0.002);
     EXPECT_EQ(px.spec.get_string_attribute("hbil:version"), HBIL_VERSION);
     const json cam = json::parse(px.spec.get_string_attribute("hbil:camera"));
     EXPECT_EQ(cam["source"], "sidecar frame_000" + std::to_string(frame) + ".camera.json");

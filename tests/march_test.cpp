@@ -104,6 +104,8 @@ TEST(MarchSimd, MatchesScalarWithMeasuredThicknessAndGather) {
   HorizonConfig c = make_horizon_config(p, cam);
   ASSERT_GT(c.gather_steps, 0);
   compare_kernels(v, c, &radiance, 2);
+  c.gather_thickness = 1.3f;  // the gather-only samples thicker than the others
+  compare_kernels(v, c, &radiance, 2);
   c.gather_steps = 0;  // the gather within the AO radius only
   compare_kernels(v, c, &radiance, 2);
 }

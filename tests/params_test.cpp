@@ -46,12 +46,17 @@ TEST(Params, DefaultsAreValidAndWithinTheirRanges) {
   const json d = to_json(Params{});
   for (const ParamInfo& info : params_table()) {
     ASSERT_TRUE(d.contains(info.key)) << info.key;
-    if (!d[info.key].is_boolean()) {
+    if (d[info.key].is_string()) {
+      EXPECT_EQ(d[info.key], "auto") << info.key;  // derived from the shot
+    } else if (!d[info.key].is_boolean()) {
       EXPECT_GE(d[info.key].get<double>(), info.min) << info.key;
       EXPECT_LE(d[info.key].get<double>(), info.max) << info.key;
     }
   }
   EXPECT_EQ(d["radius"], 1.0);
+  EXPECT_EQ(d["gather_radius"], "auto");
+  EXPECT_EQ(d["thickness"], "auto");
+  EXPECT_EQ(d["gather_thickness"], "auto");
   EXPECT_EQ(d["outputs"], json::array({"auto"}));
   EXPECT_EQ(d["passes"]["depth"], "Depth");
   EXPECT_EQ(d["passes"]["normal"], "Normal");
@@ -300,7 +305,9 @@ TEST(Params, ManPageDocumentsEveryKeyWithItsDefault) {
     ASSERT_NE(at, std::string::npos) << "man/hbil.1 lacks " << entry;
     // The stated default parses to the built-in one (numbers: up to the unit or range).
     std::string text = man.substr(at + entry.size(), man.find('\n', at) - at - entry.size());
-    if (it.value().is_number() || it.value().is_boolean()) text = text.substr(0, text.find(' '));
+    // Numbers, booleans and "auto" (a number key derived from the shot) are followed by a range.
+    if (it.value().is_number() || it.value().is_boolean() || it.value() == "auto")
+      text = text.substr(0, text.find(' '));
     for (size_t q; (q = text.find("\\-")) != std::string::npos;) text.replace(q, 2, "-");
     const json stated = json::parse(text, nullptr, false);
     ASSERT_FALSE(stated.is_discarded()) << it.key() << ": " << text;

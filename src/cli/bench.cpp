@@ -1,5 +1,7 @@
 // bench.cpp: `hbil bench SHOT -o DIR --ref LAYER=PATTERN:EXPR ...`: speed against accuracy
 // on the user's own shot (pipeline/bench.h).
+#include "pipeline/bench.h"
+
 #include <tbb/global_control.h>
 
 #include <cstdio>
@@ -9,7 +11,6 @@
 
 #include "cli/commands.h"
 #include "hbil/error.h"
-#include "pipeline/bench.h"
 
 namespace hbil::cli {
 
@@ -67,9 +68,10 @@ void bench(const BenchOptions& o) {
   for (const pipeline::RenderResult& x : r.renders)
     std::printf("%-32s %9.3f %11.2f  (render, %d samples)\n", x.pattern.c_str(),
                 x.seconds_per_frame, x.error.psnr(), x.samples);
-  std::printf("* on the layer's Pareto front; %s; written to %s (bench.json, bench.csv, "
-              "chart.svg, chart.png)\n",
-              r.machine.c_str(), o.out_dir.c_str());
+  std::printf(
+      "* on the layer's Pareto front; %s; written to %s (bench.json, bench.csv, "
+      "chart.svg, chart.png)\n",
+      r.machine.c_str(), o.out_dir.c_str());
 }
 
 }  // namespace
@@ -78,8 +80,7 @@ void add_bench(CLI::App& app) {
   auto o = std::make_shared<BenchOptions>();
   CLI::App* cmd = app.add_subcommand(
       "bench", "speed against accuracy of presets and parameter sweeps on a shot, with a chart");
-  cmd->add_option("SHOT", o->shot, "input EXR frame pattern (or one file), as for run")
-      ->required();
+  cmd->add_option("SHOT", o->shot, "input EXR frame pattern (or one file), as for run")->required();
   cmd->add_option("-o,--output", o->out_dir,
                   "folder for bench.json, bench.csv, chart.svg and chart.png")
       ->required();

@@ -5,6 +5,7 @@
 #include "cli/commands.h"
 #include "hbil/error.h"
 #include "hbil/reduced.h"
+#include "hbil/scene_scale.h"
 #include "io/camera_io.h"
 #include "io/exr_frame.h"
 #include "io/sequence.h"
@@ -69,6 +70,17 @@ void info(const std::string& path, const ParamOptions& po) {
   }
 
   std::cout << "search: " << describe_search(p, f.spec.width, f.spec.height) << "\n";
+  if (p.gather_radius_auto || p.thickness_auto || p.gather_thickness_auto) {
+    std::cout << "auto: ";
+    try {
+      GBuffer g = io::read_fields(f, {f.has("depth") ? "depth" : "position"}, p);
+      std::string why;
+      resolve_scene_params(p, measure_scene(g, io::find_camera(f, g, p), p), &why);
+      std::cout << why << "\n";
+    } catch (const Error& e) {
+      std::cout << "not available: " << e.what() << "\n";
+    }
+  }
   std::cout << "outputs:\n";
   for (const auto& o : known_outputs()) {
     Params one = p;

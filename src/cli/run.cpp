@@ -64,6 +64,8 @@ void run(const RunOptions& o) {
     if (!job.why_dropped().empty())
       std::cerr << "hbil: outputs \"auto\" left out what the input cannot give: "
                 << job.why_dropped() << "\n";
+    if (!job.scene_description().empty())
+      std::cerr << "hbil: auto: " << job.scene_description() << "\n";
     if (p.method == "bitmask") {
       std::ostringstream s;
       s << "hbil: bitmask thickness: ";

@@ -19,6 +19,8 @@ HorizonConfig make_horizon_config(const Params& p, const Camera& cam) {
   c.bitmask = p.method == "bitmask";
   c.vectorised = p.vectorised;
   c.thickness = float(p.thickness);
+  // Unresolved "auto" (a library call outside a sequence job): the samples' thickness.
+  c.gather_thickness = float(p.gather_thickness_auto ? p.thickness : p.gather_thickness);
   c.thickness_growth = float(p.thickness_growth);
   c.gather_radius = float(std::max(p.radius, p.gather_radius));
   c.gather_steps = c.gather_radius > c.radius ? p.gather_steps : 0;

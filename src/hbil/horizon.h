@@ -57,8 +57,9 @@ struct HorizonConfig {
   float fx = 1, fy = 1;  // full-resolution focal lengths, pixels
   bool bitmask = false;  // visibility bitmask (Therrien et al. 2023) instead of two horizons
   float thickness = 0.4f, thickness_growth = 0;  // bitmask occluder thickness: t + growth * z
-  float gather_radius = 1;  // world units, >= radius: how far the irradiance gather reaches
-  int gather_steps = 0;     // samples per side between radius and gather_radius (gather only)
+  float gather_thickness = 0.4f;  // the same t for the gather-only samples (beyond `steps`)
+  float gather_radius = 1;        // world units, >= radius: how far the irradiance gather reaches
+  int gather_steps = 0;           // samples per side between radius and gather_radius (gather only)
   // Temporal chain (HBIL §3.3 with accumulation): every slice angle turns by `rotation`
   // (radians) and every step jitter shifts by `jitter_shift` (mod 1), both from the frame.
   float rotation = 0, jitter_shift = 0;

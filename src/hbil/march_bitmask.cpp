@@ -77,7 +77,9 @@ PixelSums march_bitmask_pixel(const SampleView& view, int i, int j, const Vec3& 
         // [θf, θb] and lights the sectors it newly covers. Thickness: measured (back faces)
         // where known, else the constant heuristic.
         const bool measured = view.thickness && view.thickness[st.k_s] >= 0.f;
-        const float t = measured ? view.thickness[st.k_s] : c.thickness + c.thickness_growth * S.z;
+        const float t = measured
+                            ? view.thickness[st.k_s]
+                            : (near ? c.thickness : c.gather_thickness) + c.thickness_growth * S.z;
         float key_hi = key_f, key_lo = key_f;  // the largest and smallest key covered
         auto cover = [&](float q) {
           key_hi = key_hi < q ? q : key_hi;

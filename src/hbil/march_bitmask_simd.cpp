@@ -151,7 +151,8 @@ void MarchBitmaskRow(const SampleView& view, int i0, int j, int count, const flo
           const VF c_f = Dot(d3, wo);
           const VF key_f = hn::Div(hn::Mul(c_f, hn::Abs(c_f)), dist2);
           MF measured = none;
-          VF t = hn::Add(hn::Set(d, c.thickness), hn::Mul(hn::Set(d, c.thickness_growth), S.z));
+          VF t = hn::Add(hn::Set(d, near ? c.thickness : c.gather_thickness),
+                         hn::Mul(hn::Set(d, c.thickness_growth), S.z));
           if (view.thickness) {
             const VF th = hn::GatherIndex(d, view.thickness, k_s);
             measured = hn::And(m, hn::Ge(th, zero));

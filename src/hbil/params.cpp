@@ -66,12 +66,19 @@ const std::vector<ParamInfo>& params_table() {
        "its depth are not averaged (nor those whose normal is more than 37 degrees off)"},
       {"thickness", &Params::thickness, 0, 1e6, "world units",
        "method bitmask: every depth sample occludes like a slab this thick behind it (HBIL's "
-       "horizon is the limit of infinite thickness)"},
+       "horizon is the limit of infinite thickness); with a back-face layer, only where a "
+       "pixel has no back face; \"auto\" (default): 0.15 x the first frame's median depth, at "
+       "most 0.4 x radius"},
+      {"gather_thickness", &Params::gather_thickness, 0, 1e6, "world units",
+       "method bitmask: the thickness of the gather-only samples (between radius and "
+       "gather_radius), which light and shadow irradiance but not ao; \"auto\" (default): "
+       "0.15 x the first frame's median depth where thickness is auto, else thickness"},
       {"thickness_growth", &Params::thickness_growth, 0, 1e3, "per world unit",
        "method bitmask: thickness added per world unit of the sample's depth"},
       {"gather_radius", &Params::gather_radius, 0, 1e6, "world units",
        "how far the irradiance gather reaches; occluders and emitters between radius and "
-       "gather_radius light and shadow irradiance but not ao (values <= radius: radius)"},
+       "gather_radius light and shadow irradiance but not ao (values <= radius: radius); "
+       "\"auto\" (default): the width of the first frame at its median depth"},
       {"gather_steps", &Params::gather_steps, 0, 256, "per side",
        "samples per side of a slice between radius and gather_radius, seen only by the gather"},
       {"bounces", &Params::bounces, 1, 16, "count",
@@ -167,6 +174,9 @@ json to_json(const Params& p) {
   for (const ParamInfo& info : params_table()) {
     std::visit([&](auto m) { j[info.key] = p.*m; }, info.member);
   }
+  if (p.gather_radius_auto) j["gather_radius"] = "auto";
+  if (p.thickness_auto) j["thickness"] = "auto";
+  if (p.gather_thickness_auto) j["gather_thickness"] = "auto";
   j["method"] = p.method;
   j["reprojection"] = p.reprojection;
   j["environment"] = p.environment;
@@ -221,8 +231,21 @@ Params params_from_json(const json& j, const std::string& where, Params p) {
     const json& v = it.value();
     auto row = std::find_if(params_table().begin(), params_table().end(),
                             [&](const ParamInfo& i) { return key == i.key; });
-    if (row != params_table().end()) {
+    // gather_radius and thickness: a number, or "auto" (derived from the shot).
+    const bool may_be_auto =
+        key == "gather_radius" || key == "thickness" || key == "gather_thickness";
+    bool& auto_flag = key == "gather_radius" ? p.gather_radius_auto
+                      : key == "thickness"   ? p.thickness_auto
+                                             : p.gather_thickness_auto;
+    if (may_be_auto && v.is_string()) {
+      if (v.get<std::string>() != "auto")
+        fail(where, "key '" + key + "' must be a number or \"auto\", got " + v.dump());
+      auto_flag = true;
+    } else if (row != params_table().end()) {
+      if (may_be_auto && !v.is_number())
+        fail(where, "key '" + key + "' must be a number or \"auto\", got " + v.dump());
       read_number(p, *row, v, where);
+      if (may_be_auto) auto_flag = false;
     } else if (key == "method") {
       if (!v.is_string())
         fail(where, "key 'method' must be \"horizon\" or \"bitmask\", got " + v.dump());

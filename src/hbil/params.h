@@ -33,11 +33,22 @@ struct Params {
   // --- Occlusion model and indirect light ---
   std::string method = "bitmask";  // "horizon" (HBIL) or "bitmask" (Therrien et al. 2023)
   double thickness = 0.4;          // bitmask: occluder thickness behind each sample, world units
-  double thickness_growth = 0.0;   // bitmask: extra thickness per world unit of sample depth
-  int bounces = 1;                 // in-frame bounces of indirect light (1 = one bounce)
-  // gather_radius, gather_steps: the best indirect error against the samples' 1-bounce Cycles
-  // references (README "Indirect light"): 4 m reach, 16 more samples per side.
-  double gather_radius = 4.0;   // irradiance gather reach, world units (<= radius: radius)
+  // thickness "auto" (the default): derived per shot from the first frame (scene_scale.h);
+  // until it is resolved, the number above applies.
+  bool thickness_auto = true;
+  // bitmask: the thickness of the gather-only samples (between radius and gather_radius);
+  // "auto" (the default): kAutoThickness x the median depth where thickness is auto too,
+  // else thickness.
+  double gather_thickness = 0.4;
+  bool gather_thickness_auto = true;
+  double thickness_growth = 0.0;  // bitmask: extra thickness per world unit of sample depth
+  int bounces = 1;                // in-frame bounces of indirect light (1 = one bounce)
+  // gather_steps: the best indirect error against the samples' 1-bounce Cycles references
+  // (README "Indirect light"): 16 more samples per side.
+  double gather_radius = 4.0;  // irradiance gather reach, world units (<= radius: radius)
+  // gather_radius "auto" (the default): the frame's width at the median depth, resolved per
+  // shot (scene_scale.h); until then the number above applies.
+  bool gather_radius_auto = true;
   int gather_steps = 16;        // gather-only samples per side beyond radius
   std::string environment;      // far field: "" (off), equirect EXR path, or "rgb:r,g,b"
   bool ao_multibounce = false;  // ao as RGB with the multi-bounce fit (improved-AO eq. 12)

@@ -1,15 +1,16 @@
 // bench.cpp: see bench.h.
 #include "pipeline/bench.h"
 
+#include <unistd.h>
+
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
-#include <chrono>
 #include <thread>
-#include <unistd.h>
 
 #include "hbil/error.h"
 #include "io/exr_output.h"
@@ -115,8 +116,7 @@ BenchReference parse_bench_reference(const std::string& text) {
     throw Error(Exit::usage, "--ref " + text +
                                  ": expected LAYER=PATTERN:EXPRESSION, e.g. "
                                  "ao='ref/frame_####.exr:AO'");
-  BenchReference r{text.substr(0, eq), text.substr(eq + 1, colon - eq - 1),
-                   text.substr(colon + 1)};
+  BenchReference r{text.substr(0, eq), text.substr(eq + 1, colon - eq - 1), text.substr(colon + 1)};
   const auto& known = known_outputs();
   if (std::find(known.begin(), known.end(), r.layer) == known.end() || r.layer == "history")
     throw Error(Exit::usage, "--ref " + text + ": '" + r.layer +
@@ -277,8 +277,7 @@ BenchResult run_bench(const BenchSettings& s,
   // Then the timed runs, as `hbil run --no-display` with the layers judged: reading and
   // writing overlap the computing, each EXR is written (to a scratch folder, then removed);
   // the configurations alternate run by run, so that a shared machine's load falls on all.
-  const fs::path scratch =
-      fs::temp_directory_path() / ("hbil-bench-" + std::to_string(::getpid()));
+  const fs::path scratch = fs::temp_directory_path() / ("hbil-bench-" + std::to_string(::getpid()));
   struct Scratch {
     fs::path dir;
     ~Scratch() {
@@ -294,8 +293,8 @@ BenchResult run_bench(const BenchSettings& s,
       const io::FramePattern out((scratch / "frame_####.exr").string());
       SequenceJob::Hooks hooks;
       hooks.deliver = [&](FrameResult& fr) {
-        const std::string tmp = io::write_temporary(out.path(fr.frame), fr.outputs,
-                                                    fr.input->spec, job.params(), fr.camera);
+        const std::string tmp = io::write_temporary(out.path(fr.frame), fr.outputs, fr.input->spec,
+                                                    job.params(), fr.camera);
         std::error_code ec;
         fs::remove(tmp, ec);
       };
@@ -305,12 +304,13 @@ BenchResult run_bench(const BenchSettings& s,
       };
       const auto t0 = std::chrono::steady_clock::now();
       job.run(hooks, Overlap::automatic);
-      const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      const double wall =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       cr.run_seconds.push_back(wall / double(plan.frames.size()));
       if (progress) {
         char line[512];
-        std::snprintf(line, sizeof line, "bench: %s, run %d/%d: %.3f s per frame",
-                      cr.name.c_str(), run + 1, s.runs, cr.run_seconds.back());
+        std::snprintf(line, sizeof line, "bench: %s, run %d/%d: %.3f s per frame", cr.name.c_str(),
+                      run + 1, s.runs, cr.run_seconds.back());
         progress(line);
       }
     }
@@ -441,9 +441,9 @@ void write_bench(const BenchResult& r, const std::string& dir) {
     for (const std::string& layer : r.layers) {
       const ErrorStats& e = c.errors.at(layer);
       csv += "hbil," + quoted(c.name) + "," + layer + "," + f(c.seconds_per_frame) + "," +
-             f(c.times.read_ms) + "," + f(c.times.camera_ms) + "," + f(c.times.compute_ms) + "," + f(c.times.write_ms) + "," +
-             f(e.rmse()) + "," + f(e.mean_error()) + "," + f(e.psnr()) + "," +
-             f(e.relative_rmse()) + "," + f(e.energy_ratio()) + "," +
+             f(c.times.read_ms) + "," + f(c.times.camera_ms) + "," + f(c.times.compute_ms) + "," +
+             f(c.times.write_ms) + "," + f(e.rmse()) + "," + f(e.mean_error()) + "," + f(e.psnr()) +
+             "," + f(e.relative_rmse()) + "," + f(e.energy_ratio()) + "," +
              (c.pareto.at(layer) ? "1" : "0") + "," +
              (layer == "composite" && c.speedup > 0 ? c.speedup_bound + f(c.speedup) : "") + "\n";
     }
@@ -457,15 +457,17 @@ void write_bench(const BenchResult& r, const std::string& dir) {
   // and joined, the renders' curve on the composite's panel.
   std::vector<ChartPanel> panels;
   for (const std::string& layer : r.layers) {
-    ChartPanel p{layer + ": speed against accuracy", "seconds per frame (log)",
-                 "PSNR (dB), higher is better", true, {}};
+    ChartPanel p{layer + ": speed against accuracy",
+                 "seconds per frame (log)",
+                 "PSNR (dB), higher is better",
+                 true,
+                 {}};
     ChartSeries front{"hbil, Pareto front", {0.10f, 0.35f, 0.75f}, false, true, {}},
         others{"hbil, dominated", {0.10f, 0.35f, 0.75f}, false, false, {}};
     std::vector<const ConfigResult*> order;
     for (const ConfigResult& c : r.configs) order.push_back(&c);
-    std::sort(order.begin(), order.end(), [](auto a, auto b) {
-      return a->seconds_per_frame < b->seconds_per_frame;
-    });
+    std::sort(order.begin(), order.end(),
+              [](auto a, auto b) { return a->seconds_per_frame < b->seconds_per_frame; });
     for (const ConfigResult* c : order) {
       ChartSeries::Point pt{c->seconds_per_frame, c->errors.at(layer).psnr(), c->name,
                             c->pareto.at(layer)};

@@ -65,13 +65,13 @@ struct StageTimes {
 struct ConfigResult {
   std::string name;
   Params params;
-  StageTimes times;                 // medians over frames and runs
-  std::vector<double> run_seconds;  // each run's wall clock per frame
-  double seconds_per_frame = 0;     // median of run_seconds
-  std::map<std::string, ErrorStats> errors;          // layer -> over all frames
-  std::map<std::string, std::vector<double>> psnr;   // layer -> per frame
-  std::map<std::string, bool> pareto;                // layer -> on that layer's front
-  double speedup = 0;       // the render's time at equal composite error / ours; 0: none
+  StageTimes times;                                 // medians over frames and runs
+  std::vector<double> run_seconds;                  // each run's wall clock per frame
+  double seconds_per_frame = 0;                     // median of run_seconds
+  std::map<std::string, ErrorStats> errors;         // layer -> over all frames
+  std::map<std::string, std::vector<double>> psnr;  // layer -> per frame
+  std::map<std::string, bool> pareto;               // layer -> on that layer's front
+  double speedup = 0;         // the render's time at equal composite error / ours; 0: none
   std::string speedup_bound;  // "" (interpolated), ">" or "<" (beyond the render curve)
 };
 
@@ -93,7 +93,8 @@ struct BenchResult {
 
 // Measures every configuration's errors (one run, untimed), then times it `runs` times,
 // alternating the configurations, as `hbil run --no-display` computing the layers judged
-// (the EXRs are written to a scratch folder and removed). `progress` gets a line per run. Throws hbil::Error as `hbil run` and `hbil compare` do.
+// (the EXRs are written to a scratch folder and removed). `progress` gets a line per run. Throws
+// hbil::Error as `hbil run` and `hbil compare` do.
 BenchResult run_bench(const BenchSettings& s,
                       const std::function<void(const std::string&)>& progress = {});
 

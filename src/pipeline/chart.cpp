@@ -131,8 +131,8 @@ void draw_panel(const ChartPanel& p, int ox, Drawing& d) {
         at.emplace_back(X(pt.x), Y(pt.y));
     if (s.connect)
       for (size_t i = 1; i < at.size(); ++i)
-        d.lines.push_back({at[i - 1].first, at[i - 1].second, at[i].first, at[i].second, s.colour,
-                           2});
+        d.lines.push_back(
+            {at[i - 1].first, at[i - 1].second, at[i].first, at[i].second, s.colour, 2});
     size_t k = 0;
     for (const auto& pt : s.points) {
       if (!std::isfinite(pt.x) || !std::isfinite(pt.y) || (p.log_x && pt.x <= 0)) continue;
@@ -182,8 +182,8 @@ std::string escape(const std::string& s) {
 // A font for the PNG's text: DejaVu Sans (Debian's fonts-dejavu-core), else OpenImageIO's
 // own search.
 std::string chart_font() {
-  for (const char* f : {"/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf",
-                        "/usr/share/fonts/TTF/DejaVuSans.ttf"})
+  for (const char* f :
+       {"/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf", "/usr/share/fonts/TTF/DejaVuSans.ttf"})
     if (std::filesystem::exists(f)) return f;
   return "";
 }
@@ -193,8 +193,8 @@ std::string chart_font() {
 std::string chart_svg(const std::vector<ChartPanel>& panels) {
   const Drawing d = draw(panels);
   std::ostringstream s;
-  s << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << d.width << "\" height=\""
-    << d.height << "\" viewBox=\"0 0 " << d.width << " " << d.height
+  s << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << d.width << "\" height=\"" << d.height
+    << "\" viewBox=\"0 0 " << d.width << " " << d.height
     << "\" font-family=\"DejaVu Sans, Verdana, sans-serif\">\n"
     << "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n";
   for (const Line& l : d.lines)
@@ -211,7 +211,10 @@ std::string chart_svg(const std::vector<ChartPanel>& panels) {
   }
   for (const Text& t : d.texts)
     s << "<text x=\"" << t.x << "\" y=\"" << t.y << "\" font-size=\"" << t.size
-      << "\" text-anchor=\"" << (t.anchor < 0 ? "start" : t.anchor > 0 ? "end" : "middle")
+      << "\" text-anchor=\""
+      << (t.anchor < 0   ? "start"
+          : t.anchor > 0 ? "end"
+                         : "middle")
       << "\" fill=\"" << rgb(t.colour) << "\">" << escape(t.text) << "</text>\n";
   s << "</svg>\n";
   return s.str();
@@ -237,10 +240,9 @@ void write_chart_png(const std::vector<ChartPanel>& panels, const std::string& p
       for (int x = cx - r; x <= cx + r; ++x) {
         if (x < 0 || y < 0 || x >= d.width || y >= d.height) continue;
         const double dx = x - m.x, dy = y - m.y, dist = std::sqrt(dx * dx + dy * dy);
-        const bool inside = m.square ? std::max(std::fabs(dx), std::fabs(dy)) <= m.r
-                                     : dist <= m.r;
-        const bool edge = m.square ? std::max(std::fabs(dx), std::fabs(dy)) > m.r - 1.5
-                                   : dist > m.r - 1.5;
+        const bool inside = m.square ? std::max(std::fabs(dx), std::fabs(dy)) <= m.r : dist <= m.r;
+        const bool edge =
+            m.square ? std::max(std::fabs(dx), std::fabs(dy)) > m.r - 1.5 : dist > m.r - 1.5;
         if (inside && (m.filled || edge)) buf.setpixel(x, y, m.colour.data());
       }
   }

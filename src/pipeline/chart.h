@@ -12,8 +12,8 @@ namespace hbil::pipeline {
 struct ChartSeries {
   std::string name;  // legend
   std::array<float, 3> colour{0.f, 0.f, 0.f};
-  bool square = false;        // square markers (else circles)
-  bool connect = false;       // a line through the points in order
+  bool square = false;   // square markers (else circles)
+  bool connect = false;  // a line through the points in order
   struct Point {
     double x = 0, y = 0;
     std::string label;

@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "hbil/error.h"
+#include "hbil/scene_scale.h"
 
 namespace hbil::pipeline {
 
@@ -77,6 +78,14 @@ SequenceJob::SequenceJob(SequencePlan plan, const Params& requested) : plan_(std
   const int f = plan_.frames.front();
   first_ = io::open_frame(plan_.input.path(f), f, requested);
   p_ = io::resolve_outputs(first_, requested, &why_dropped_);
+  if (p_.gather_radius_auto || p_.thickness_auto || p_.gather_thickness_auto) {
+    // From the first frame's depth (else position) and camera: read once more here, a field
+    // or two, so that every frame of the run, the first included, uses the same values.
+    GBuffer g = io::read_fields(first_, {first_.has("depth") ? "depth" : "position"}, p_);
+    const Camera cam = io::find_camera(first_, g, p_);
+    scene_ = measure_scene(g, cam, p_);
+    p_ = resolve_scene_params(p_, scene_, &why_scene_);
+  }
 }
 
 bool SequenceJob::overlaps(Overlap o) const {

@@ -17,6 +17,7 @@
 
 #include "hbil/ao_frame.h"
 #include "hbil/params.h"
+#include "hbil/scene_scale.h"
 #include "hbil/temporal.h"
 #include "io/exr_frame.h"
 #include "io/sequence.h"
@@ -73,6 +74,9 @@ class SequenceJob {
   const io::InputFrame& first() const { return first_; }
   // The missing-pass message of the first "auto" output left out ("" when none was).
   const std::string& why_dropped() const { return why_dropped_; }
+  // What gather_radius and thickness "auto" became, and from what ("" when neither was).
+  const std::string& scene_description() const { return why_scene_; }
+  const SceneScale& scene() const { return scene_; }
   // Whether run() overlaps: "auto" does up to 2^22 pixels (2560x1440).
   bool overlaps(Overlap o) const;
 
@@ -94,7 +98,8 @@ class SequenceJob {
   SequencePlan plan_;
   io::InputFrame first_;
   Params p_;
-  std::string why_dropped_;
+  std::string why_dropped_, why_scene_;
+  SceneScale scene_;
 };
 
 }  // namespace hbil::pipeline
