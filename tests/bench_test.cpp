@@ -213,3 +213,54 @@ TEST(BenchRun, RenderWithoutCompositeReferenceIsUsageError) {
 
 }  // namespace
 }  // namespace hbil
+
+namespace hbil {
+namespace {
+
+// `hbil tune` on one sample frame: the preset it writes loads, records what it was tuned on,
+// and is within the tolerance of the base configuration or better; with a budget nothing
+// meets, it says so and keeps the fastest configuration it found.
+TEST(Tune, WritesAPresetNoWorseThanTheBase) {
+  test::TempDir dir(test::test_name());
+  const std::string in = test::kRoomPoles + "/frame_####.exr";
+  const std::string refs = " --frames 1 --ref " + test::q("ao=" + in + ":AO") + " --ref " +
+                           test::q("composite=" + in + ":Combined");
+  const auto t =
+      test::run_hbil("tune " + test::q(in) + refs + " -o " + test::q(dir / "t.json"), dir.path());
+  ASSERT_EQ(t.code, 0) << t.err;
+  std::ifstream f(dir / "t.json");
+  const nlohmann::json j = nlohmann::json::parse(f);
+  EXPECT_NO_THROW(params_from_json(j, "tuned preset"));
+  EXPECT_EQ(j["tuned"]["layer"], "composite");
+  EXPECT_EQ(j["tuned"]["frames"], "1");
+  EXPECT_EQ(j["tuned"]["references"].size(), 2u);
+  EXPECT_GT(j["tuned"]["configurations_measured"].get<int>(), 10);
+  // The base: bench with the defaults, on the same frame.
+  const auto b = test::run_hbil("bench " + test::q(in) + refs + " -o " + test::q(dir / "b") + " -q",
+                                dir.path());
+  ASSERT_EQ(b.code, 0) << b.err;
+  std::ifstream bf(dir / "b/bench.json");
+  const nlohmann::json bj = nlohmann::json::parse(bf);
+  const double base = bj["configurations"][0]["layers"]["composite"]["psnr"].get<double>();
+  EXPECT_GE(j["tuned"]["errors"]["composite"]["psnr"].get<double>(), base - 0.1 - 1e-9);
+
+  const auto none = test::run_hbil(
+      "tune " + test::q(in) + refs + " --budget 1e-6 -q -o " + test::q(dir / "n.json"), dir.path());
+  ASSERT_EQ(none.code, 0) << none.err;
+  EXPECT_TRUE(contains(none.out, "none was")) << none.out;
+}
+
+TEST(Tune, UnknownObjectiveLayerIsUsageError) {
+  test::TempDir dir(test::test_name());
+  const std::string in = test::kRoomPoles + "/frame_####.exr";
+  const auto t =
+      test::run_hbil("tune " + test::q(in) + " --frames 1 --ref " + test::q("ao=" + in + ":AO") +
+                         " --layer composite -q -o " + test::q(dir / "t.json"),
+                     dir.path());
+  EXPECT_EQ(t.code, int(Exit::usage)) << t.err;
+  EXPECT_TRUE(contains(t.err, "--layer composite: no --ref for it")) << t.err;
+  EXPECT_FALSE(fs::exists(dir / "t.json"));
+}
+
+}  // namespace
+}  // namespace hbil

@@ -29,6 +29,7 @@ Params read_preset(const std::string& path);
 
 void add_run(CLI::App& app);
 void add_bench(CLI::App& app);
+void add_tune(CLI::App& app);
 void add_info(CLI::App& app);
 void add_compare(CLI::App& app);
 void add_preset(CLI::App& app);

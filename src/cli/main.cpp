@@ -15,6 +15,7 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", "hbil " HBIL_VERSION);
   hbil::cli::add_run(app);
   hbil::cli::add_bench(app);
+  hbil::cli::add_tune(app);
   hbil::cli::add_info(app);
   hbil::cli::add_compare(app);
   hbil::cli::add_preset(app);

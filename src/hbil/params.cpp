@@ -282,6 +282,8 @@ Params params_from_json(const json& j, const std::string& where, Params p) {
                           "' must be a pass name or an array of channel names, got " + c.dump());
         p.passes[pit.key()] = c;
       }
+    } else if (key == "tuned") {
+      // What `hbil tune` tuned the preset on: a record for the reader, not a parameter.
     } else if (key == "compression") {
       if (!v.is_string())
         fail(where, "key 'compression' must be one of " + allowed_list(output_compressions()) +
@@ -299,7 +301,7 @@ Params params_from_json(const json& j, const std::string& where, Params p) {
       std::vector<std::string> keys;
       for (const auto& i : params_table()) keys.push_back(i.key);
       keys.insert(keys.end(), {"method", "reprojection", "environment", "view_layer", "input_space",
-                               "passes", "outputs", "compression"});
+                               "passes", "outputs", "compression", "tuned"});
       fail(where, "unknown key '" + key + "' (known: " + allowed_list(keys) + ")");
     }
   }
