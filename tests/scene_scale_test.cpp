@@ -98,3 +98,30 @@ TEST(SceneScale, AutoInPresets) {
 
 }  // namespace
 }  // namespace hbil
+
+namespace hbil {
+namespace {
+
+// A chunk of a shot resolves "auto" from the shot's first frame on disk, as the whole run
+// does: its frames carry the same parameters, and a chunk starting at a cut is the whole
+// run's frame to the bit.
+TEST(SceneScale, ChunksUseTheShotsFirstFrame) {
+  test::TempDir dir(test::test_name());
+  const std::string in = test::kSourceDir + "/samples/room_cut/frame_####.exr";
+  auto run = [&](const std::string& frames, const std::string& out) {
+    const auto r = test::run_hbil(
+        "run " + test::q(in) + frames + " -o " + test::q(dir / out) + " -q --no-display",
+        dir.path());
+    ASSERT_EQ(r.code, 0) << r.err;
+  };
+  run("", "all/f_####.exr");
+  run(" --frames 4-5", "chunk/f_####.exr");
+  const test::Pixels whole = test::read_pixels(dir / "all/f_0004.exr");
+  const test::Pixels chunk = test::read_pixels(dir / "chunk/f_0004.exr");
+  EXPECT_EQ(whole.spec.get_string_attribute("hbil:preset"),
+            chunk.spec.get_string_attribute("hbil:preset"));
+  EXPECT_EQ(whole.data, chunk.data) << "frame 4 is a cut: no history in either run";
+}
+
+}  // namespace
+}  // namespace hbil

@@ -1,6 +1,8 @@
-// scene_scale.h: parameters that fit the shot, with no reference: gather_radius and thickness
-// "auto" are derived from the first frame's G-buffer, once per run, so that every frame of
-// the run uses the same values.
+// scene_scale.h: parameters that fit the shot, with no reference: gather_radius, thickness
+// and gather_thickness "auto" are derived from the G-buffer of the shot's first frame, once
+// per run (pipeline::SequenceJob takes the sequence's first frame on disk, whatever
+// --frames says), so that every frame of a run, and every chunk of a shot, uses the same
+// values.
 //
 //  - gather_radius "auto": the width of the frame at the median depth of its geometry
 //    pixels, width_px * median_depth / fx. The gather then reaches across what the frame

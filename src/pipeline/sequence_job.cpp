@@ -79,10 +79,18 @@ SequenceJob::SequenceJob(SequencePlan plan, const Params& requested) : plan_(std
   first_ = io::open_frame(plan_.input.path(f), f, requested);
   p_ = io::resolve_outputs(first_, requested, &why_dropped_);
   if (p_.gather_radius_auto || p_.thickness_auto || p_.gather_thickness_auto) {
-    // From the first frame's depth (else position) and camera: read once more here, a field
-    // or two, so that every frame of the run, the first included, uses the same values.
-    GBuffer g = io::read_fields(first_, {first_.has("depth") ? "depth" : "position"}, p_);
-    const Camera cam = io::find_camera(first_, g, p_);
+    // From the depth (else position) and camera of the sequence's first frame on disk, not
+    // the run's: every chunk of a shot (--frames, --preroll) then uses the values a run over
+    // the whole shot uses. Read once more here, a field or two.
+    int f0 = f;
+    if (plan_.input.is_sequence()) {
+      const std::vector<int> on_disk = plan_.input.existing_frames();
+      if (!on_disk.empty()) f0 = on_disk.front();
+    }
+    const io::InputFrame shot_first =
+        f0 == f ? first_ : io::open_frame(plan_.input.path(f0), f0, p_);
+    GBuffer g = io::read_fields(shot_first, {shot_first.has("depth") ? "depth" : "position"}, p_);
+    const Camera cam = io::find_camera(shot_first, g, p_);
     scene_ = measure_scene(g, cam, p_);
     p_ = resolve_scene_params(p_, scene_, &why_scene_);
   }

@@ -1,0 +1,54 @@
+#!/usr/bin/env bash
+# auto_defaults.sh: gather_radius, thickness and gather_thickness "auto" against the former
+# fixed defaults (4 m, 0.4) and against the best of a grid, per scene (README "Defaults that
+# fit the scene").
+#
+#   bench/auto_defaults.sh DIR...        (HBIL=build/hbil by default)
+#
+# Each DIR holds frame_####.exr (8 diffuse bounces, with AO, DiffCol, DiffInd, Combined) and
+# bounce1/frame_####.exr (1 diffuse bounce), as samples/blender/<scene>.py renders them
+# (`--mode main` into DIR, `--mode bounce1` into DIR/bounce1). The back-face layer, where a
+# scene has one, is not used (passes.backdepth ""): the rule is for renders without it.
+# For each scene, `hbil bench` runs the default preset over all its frames with gather_radius
+# in {auto, 0.5, 1, 2, 4, 8, 16, 32} x thickness in {auto, 0.02, 0.05, 0.1, 0.2, 0.4, 0.8,
+# 1.6} (a given thickness is the gather's too) and prints: indirect relative RMSE against the
+# 1-bounce DiffCol*DiffInd, AO RMSE against the AO pass, composite PSNR against Combined, for
+# auto, for the former defaults (4, 0.4) and for the best configuration of the grid on each
+# measure; and auto's ratio to the best (1.0 = as good as the best).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+hbil=${HBIL:-build/hbil}
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+echo "- machine: $(nproc) cores; load at start: $(uptime | sed 's/.*load average: //')"
+echo
+echo "| scene | median depth | gather_radius / thickness / gather_thickness (auto) | indirect rel. RMSE: auto / 4 m, 0.4 / best (auto ÷ best) | AO RMSE: auto / 4 m, 0.4 / best (auto ÷ best) | composite PSNR: auto / 4 m, 0.4 |"
+echo "|---|---|---|---|---|---|"
+for dir in "$@"; do
+  name=$(basename "$dir")
+  s="$dir/frame_####.exr"
+  auto=$("$hbil" info "$dir/frame_0001.exr" --set 'passes.backdepth=""' | sed -n 's/^auto: //p')
+  "$hbil" bench "$s" -o "$tmp/$name" -q --set 'passes.backdepth=""' \
+    --ref "ao=$s:AO" --ref "indirect=$dir/bounce1/frame_####.exr:DiffCol*DiffInd" \
+    --ref "composite=$s:Combined" \
+    --sweep 'gather_radius="auto",0.5,1,2,4,8,16,32' \
+    --sweep 'thickness="auto",0.02,0.05,0.1,0.2,0.4,0.8,1.6' > /dev/null
+  python3 - "$tmp/$name/bench.json" "$name" "$auto" <<'PY'
+import json, re, sys
+j = json.load(open(sys.argv[1]))
+cs = {c["name"]: c for c in j["configurations"]}
+auto = cs['default gather_radius="auto" thickness="auto"']
+old = cs["default gather_radius=4 thickness=0.4"]
+ind = lambda c: c["layers"]["indirect"]["relative_rmse"]
+ao = lambda c: c["layers"]["ao"]["rmse"]
+comp = lambda c: c["layers"]["composite"]["psnr"]
+bi = min(cs.values(), key=ind)
+ba = min(cs.values(), key=ao)
+m = re.search(r"median depth ([0-9.e+]+)", sys.argv[3])
+vals = re.findall(r"(gather_radius|thickness|gather_thickness) ([0-9.e+]+)", sys.argv[3])
+print("| %s | %s m | %s | %.3f / %.3f / %.3f (%.2f) | %.4f / %.4f / %.4f (%.2f) | %.2f / %.2f dB |" % (
+    sys.argv[2], m.group(1) if m else "?", " / ".join(v for _, v in vals),
+    ind(auto), ind(old), ind(bi), ind(auto) / ind(bi),
+    ao(auto), ao(old), ao(ba), ao(auto) / ao(ba), comp(auto), comp(old)))
+PY
+done
