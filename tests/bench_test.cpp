@@ -264,3 +264,51 @@ TEST(Tune, UnknownObjectiveLayerIsUsageError) {
 
 }  // namespace
 }  // namespace hbil
+
+namespace hbil {
+namespace {
+
+// --stability on three sample frames: single frames repeat their samples (flicker exactly
+// 0); the cut from the shot's frame 8 back to frame 1 is found by the rejected history and its
+// first frame is the uncut run's (0 frames to recover); with every cut threshold off it is
+// not; every non-finite input is refused.
+TEST(BenchStability, FiguresOnTheSample) {
+  test::TempDir dir(test::test_name());
+  const std::string in = test::kRoomPoles + "/frame_####.exr";
+  const auto b = test::run_hbil(
+      "bench " + test::q(in) + " -o " + test::q(dir / "s") + " --frames 1-3 --ref " +
+          test::q("composite=" + in + ":Combined") + " --stability -q --sweep temporal=true,false" +
+          " --sweep cut_rejected=0.6,1 --set cut_camera_angle=180 --set cut_camera_jump=1000",
+      dir.path());
+  ASSERT_EQ(b.code, 0) << b.err;
+  std::ifstream jf(dir / "s/bench.json");
+  const nlohmann::json j = nlohmann::json::parse(jf);
+  ASSERT_EQ(j["configurations"].size(), 4u);
+  std::map<std::string, nlohmann::json> st;
+  for (const auto& c : j["configurations"]) st[c["name"]] = c["stability"];
+  const auto& chain = st["default temporal=true cut_rejected=0.6"];
+  const auto& blind = st["default temporal=true cut_rejected=1"];
+  const auto& single = st["default temporal=false cut_rejected=0.6"];
+  EXPECT_EQ(chain["layer"], "composite");
+  EXPECT_GT(chain["flicker"].get<double>(), 0);
+  EXPECT_EQ(single["flicker"].get<double>(), 0);
+  EXPECT_TRUE(chain["cut_detected"].get<bool>());
+  EXPECT_EQ(chain["cut_recovery_frames"], 0);
+  EXPECT_FALSE(blind["cut_detected"].get<bool>());
+  EXPECT_NE(blind["cut_recovery_frames"], 0);
+  for (const auto& [name, f] : st) {
+    SCOPED_TRACE(name);
+    EXPECT_TRUE(f["robust"].get<bool>());
+    EXPECT_TRUE(f["zero_normals_finite"].get<bool>());
+    EXPECT_EQ(f["non_finite_input"],
+              "NaN depth: refused (exit 5), infinite depth: refused (exit 5), NaN DiffCol: "
+              "refused (exit 5)");
+    EXPECT_GT(f["edge_rmse"].get<double>(), 0);
+    EXPECT_GT(f["thin_rmse"].get<double>(), 0);  // the sample's poles and fence
+    EXPECT_GT(f["thin_share"].get<double>(), 0.01);
+  }
+  EXPECT_TRUE(fs::exists(dir / "s/stability.csv"));
+}
+
+}  // namespace
+}  // namespace hbil

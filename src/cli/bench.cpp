@@ -20,7 +20,7 @@ struct BenchOptions {
   std::string shot, out_dir, frames, mask = "auto";
   std::vector<std::string> presets, sets, sweeps, refs, renders;
   int runs = 1, threads = 0;
-  bool quiet = false;
+  bool quiet = false, stability = false;
 };
 
 void bench(const BenchOptions& o) {
@@ -29,6 +29,7 @@ void bench(const BenchOptions& o) {
   s.frames = o.frames;
   s.runs = o.runs;
   s.mask.mask = o.mask;
+  s.stability = o.stability;
   for (const std::string& r : o.refs) s.refs.push_back(pipeline::parse_bench_reference(r));
   for (const std::string& r : o.renders) s.renders.push_back(pipeline::parse_bench_render(r));
   std::vector<pipeline::BenchConfig> bases;
@@ -64,6 +65,19 @@ void bench(const BenchOptions& o) {
       std::printf(" %14s", c.speedup > 0 ? b : "-");
     }
     std::printf("\n");
+  }
+  if (!r.configs.empty() && r.configs.front().has_stability) {
+    std::printf(
+        "\nstability (%s): flicker, RMSE revealed / other, cut (frames to recover), "
+        "RMSE edge / interior, RMSE thin / rest, bad pixels\n",
+        r.configs.front().stability.layer.c_str());
+    for (const pipeline::ConfigResult& c : r.configs) {
+      const pipeline::StabilityFigures& f = c.stability;
+      std::printf("%-32s %.5f  %.4f / %.4f  %s (%d)  %.4f / %.4f  %.4f / %.4f  %s\n",
+                  c.name.c_str(), f.flicker, f.revealed_rmse, f.other_rmse,
+                  f.cut_detected ? "detected" : "missed", f.cut_recovery_frames, f.edge_rmse,
+                  f.interior_rmse, f.thin_rmse, f.rest_rmse, f.robust ? "robust" : "NOT robust");
+    }
   }
   for (const pipeline::RenderResult& x : r.renders)
     std::printf("%-32s %9.3f %11.2f  (render, %d samples)\n", x.pattern.c_str(),
@@ -114,6 +128,9 @@ void add_bench(CLI::App& app) {
   cmd->add_option("--threads", o->threads, "worker threads (0 = all cores)")
       ->default_val(0)
       ->check(CLI::NonNegativeNumber);
+  cmd->add_flag("--stability", o->stability,
+                "also the stability figures: flicker, revealed pixels, cut, screen edge, thin "
+                "objects, bad pixels (stability.csv; man hbil, bench)");
   cmd->add_flag("-q,--quiet", o->quiet, "no progress lines");
   cmd->callback([o] { bench(*o); });
 }

@@ -325,7 +325,8 @@ LayerComparison compare_layers(ChannelSource& test, const LayerExpr& test_expr,
                                const std::string& test_option, const std::string& test_text,
                                ChannelSource& ref, const LayerExpr& ref_expr,
                                const std::string& ref_option, const std::string& ref_text,
-                               const MaskSpec& mask, bool colour_only) {
+                               const MaskSpec& mask, bool colour_only,
+                               const std::vector<unsigned char>* region) {
   if (test.width() != ref.width() || test.height() != ref.height())
     throw Error(Exit::bad_data, test.name() + " is " + std::to_string(test.width()) + "x" +
                                     std::to_string(test.height()) + " but " + ref.name() + " is " +
@@ -338,7 +339,10 @@ LayerComparison compare_layers(ChannelSource& test, const LayerExpr& test_expr,
                                  std::to_string(tb.channels()) + " channels but '" +
                                  to_string(ref_expr) + "' has " + std::to_string(rb.channels()));
   LayerComparison out;
-  const auto valid = make_mask(test, ref, mask, out.mask);
+  auto valid = make_mask(test, ref, mask, out.mask);
+  if (region)
+    for (size_t i = 0; i < valid.size() && i < region->size(); ++i)
+      valid[i] = valid[i] && (*region)[i];
   tb.prepare(n);
   rb.prepare(n);
   auto is_alpha = [](const std::string& c) {

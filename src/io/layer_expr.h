@@ -152,12 +152,14 @@ struct LayerComparison {
 // An expression of `test` against one of `ref` (one channel against several is compared with
 // each: ao.Y against AO.R, AO.G, AO.B). `colour_only`: channel pairs where either channel is
 // an alpha (its name ends in ".A" or is "A") are left out, so that a composite is judged on
-// R, G, B. Throws Error(Exit::bad_data) for images of different sizes, Error(Exit::usage)
-// for channel counts that do not match.
+// R, G, B. `region`, when given, keeps only the valid pixels where it is non-zero. Throws
+// Error(Exit::bad_data) for images of different sizes, Error(Exit::usage) for channel
+// counts that do not match.
 LayerComparison compare_layers(ChannelSource& test, const LayerExpr& test_expr,
                                const std::string& test_option, const std::string& test_text,
                                ChannelSource& ref, const LayerExpr& ref_expr,
                                const std::string& ref_option, const std::string& ref_text,
-                               const MaskSpec& mask, bool colour_only = false);
+                               const MaskSpec& mask, bool colour_only = false,
+                               const std::vector<unsigned char>* region = nullptr);
 
 }  // namespace hbil::io

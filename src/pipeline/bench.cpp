@@ -16,6 +16,7 @@
 #include "io/exr_output.h"
 #include "pipeline/chart.h"
 #include "pipeline/sequence_job.h"
+#include "pipeline/stability.h"
 
 namespace hbil::pipeline {
 
@@ -323,6 +324,38 @@ BenchResult run_bench(const BenchSettings& s,
     cr.times = {median(rd), median(cm), median(cp), median(wr)};
     cr.seconds_per_frame = median(cr.run_seconds);
   }
+  // Stability, per configuration, on one colour layer (else the first judged).
+  if (s.stability) {
+    const BenchReference* judged = &s.refs.front();
+    for (const char* l : {"composite", "indirect", "irradiance"}) {
+      auto it = std::find_if(s.refs.begin(), s.refs.end(),
+                             [&](const BenchReference& r) { return r.layer == l; });
+      if (it != s.refs.end()) {
+        judged = &*it;
+        break;
+      }
+    }
+    for (size_t ci = 0; ci < configs.size(); ++ci) {
+      const fs::path dir = scratch / ("stability-" + std::to_string(ci));
+      r.configs[ci].stability =
+          measure_stability(s, {configs[ci].name, s.configs[ci].params}, *judged, dir.string());
+      r.configs[ci].has_stability = true;
+      std::error_code ec;
+      fs::remove_all(dir, ec);
+      if (progress) {
+        const StabilityFigures& f = r.configs[ci].stability;
+        char line[512];
+        std::snprintf(line, sizeof line,
+                      "bench: %s stability (%s): flicker %.5f, revealed/other RMSE %.4f/%.4f, cut "
+                      "%s, edge/interior %.4f/%.4f, thin/rest %.4f/%.4f, %s",
+                      configs[ci].name.c_str(), f.layer.c_str(), f.flicker, f.revealed_rmse,
+                      f.other_rmse, f.cut_detected ? "detected" : "not detected", f.edge_rmse,
+                      f.interior_rmse, f.thin_rmse, f.rest_rmse,
+                      f.robust ? "robust" : "NOT robust");
+        progress(line);
+      }
+    }
+  }
   // The renderer's curve: each render's time from its header and its composite error.
   for (const BenchRender& br : s.renders) {
     RenderResult rr;
@@ -408,6 +441,24 @@ void write_bench(const BenchResult& r, const std::string& dir) {
       for (double v : c.psnr.at(layer)) jl["psnr_per_frame"].push_back(num_or_null(v));
       jc["layers"][layer] = jl;
     }
+    if (c.has_stability) {
+      const StabilityFigures& f = c.stability;
+      jc["stability"] = {{"layer", f.layer},
+                         {"flicker", f.flicker},
+                         {"revealed_rmse", f.revealed_rmse},
+                         {"other_rmse", f.other_rmse},
+                         {"revealed_share", f.revealed_share},
+                         {"cut_detected", f.cut_detected},
+                         {"cut_recovery_frames", f.cut_recovery_frames},
+                         {"edge_rmse", f.edge_rmse},
+                         {"interior_rmse", f.interior_rmse},
+                         {"thin_rmse", f.thin_rmse},
+                         {"rest_rmse", f.rest_rmse},
+                         {"thin_share", f.thin_share},
+                         {"zero_normals_finite", f.zero_normals_finite},
+                         {"non_finite_input", f.bad_input},
+                         {"robust", f.robust}};
+    }
     if (c.speedup > 0) {
       jc["equal_error_speedup"] = c.speedup;
       if (!c.speedup_bound.empty()) jc["equal_error_speedup_bound"] = c.speedup_bound;
@@ -453,6 +504,23 @@ void write_bench(const BenchResult& r, const std::string& dir) {
            f(x.error.mean_error()) + "," + f(x.error.psnr()) + "," + f(x.error.relative_rmse()) +
            "," + f(x.error.energy_ratio()) + ",,\n";
   write_file("bench.csv", csv);
+  // Stability: one row per configuration.
+  if (!r.configs.empty() && r.configs.front().has_stability) {
+    std::string st =
+        "name,layer,flicker,revealed_rmse,other_rmse,revealed_share,cut_detected,"
+        "cut_recovery_frames,edge_rmse,interior_rmse,thin_rmse,rest_rmse,thin_share,"
+        "zero_normals_finite,non_finite_input,robust\n";
+    for (const ConfigResult& c : r.configs) {
+      const StabilityFigures& x = c.stability;
+      st += quoted(c.name) + "," + x.layer + "," + f(x.flicker) + "," + f(x.revealed_rmse) + "," +
+            f(x.other_rmse) + "," + f(x.revealed_share) + "," + (x.cut_detected ? "1" : "0") + "," +
+            std::to_string(x.cut_recovery_frames) + "," + f(x.edge_rmse) + "," +
+            f(x.interior_rmse) + "," + f(x.thin_rmse) + "," + f(x.rest_rmse) + "," +
+            f(x.thin_share) + "," + (x.zero_normals_finite ? "1" : "0") + "," +
+            quoted(x.bad_input) + "," + (x.robust ? "1" : "0") + "\n";
+    }
+    write_file("stability.csv", st);
+  }
   // The chart: a panel per layer, seconds per frame against PSNR; the Pareto front filled
   // and joined, the renders' curve on the composite's panel.
   std::vector<ChartPanel> panels;

@@ -56,10 +56,26 @@ struct BenchSettings {
   std::vector<BenchRender> renders;
   int runs = 1;  // timed runs per configuration, alternated; medians reported
   io::MaskSpec mask;
+  bool stability = false;  // also the stability figures (stability.h), on the first --ref
+                           // layer that is composite, indirect or irradiance, else the first
 };
 
 struct StageTimes {
   double read_ms = 0, camera_ms = 0, compute_ms = 0, write_ms = 0;
+};
+
+// `hbil bench --stability` (stability.h defines each figure); -1: not measured.
+struct StabilityFigures {
+  std::string layer;  // the layer judged
+  double flicker = -1;
+  double revealed_rmse = -1, other_rmse = -1, revealed_share = -1;
+  bool cut_detected = false;
+  int cut_recovery_frames = -1;  // -1: not measured (a single frame) or not within the run
+  double edge_rmse = -1, interior_rmse = -1;
+  double thin_rmse = -1, rest_rmse = -1, thin_share = -1;
+  bool zero_normals_finite = false;
+  std::string bad_input;  // what each injected non-finite input did ("refused (exit 5)" ...)
+  bool robust = false;    // zero normals finite and every non-finite input refused
 };
 
 struct ConfigResult {
@@ -71,6 +87,8 @@ struct ConfigResult {
   std::map<std::string, ErrorStats> errors;         // layer -> over all frames
   std::map<std::string, std::vector<double>> psnr;  // layer -> per frame
   std::map<std::string, bool> pareto;               // layer -> on that layer's front
+  bool has_stability = false;
+  StabilityFigures stability;
   double speedup = 0;         // the render's time at equal composite error / ours; 0: none
   std::string speedup_bound;  // "" (interpolated), ">" or "<" (beyond the render curve)
 };
