@@ -1,5 +1,4 @@
 // run.cpp: `hbil run INPUT -o OUTPUT`: the per-frame chain over a sequence.
-#include <malloc.h>
 #include <tbb/global_control.h>
 #include <unistd.h>
 
@@ -39,26 +38,14 @@ std::string join_outputs(const std::vector<std::string>& v) {
 }
 
 void run(const RunOptions& o) {
-  // glibc serves buffers above its heap threshold from mmap and returns them to the system
-  // when they are freed; smaller ones stay in its heaps for reuse. The threshold is fixed here
-  // (glibc's own moves up to 32 MiB as buffers are freed): at 32 MiB where a frame's RGB
-  // float plane fits below it, with the heaps trimmed only above 64 MiB free (glibc's rule
-  // there), so that frame buffers are reused without page faults; at 1 MiB where it does not
-  // (3840x2160 and up: those planes are mapped and unmapped every frame anyway), so that the
-  // smaller buffers are returned too and add nothing to the run's peak memory. 1 MiB until
-  // the first frame's size is known.
-  mallopt(M_MMAP_THRESHOLD, 1 << 20);
+  pipeline::configure_heap(0, 0);  // until the first frame's size is known
   const Params requested = o.params.load();
   const pipeline::Overlap overlap = pipeline::parse_overlap(o.overlap);
   const pipeline::SequenceJob job(
       pipeline::plan_sequence(o.input, o.frames, o.preroll, o.cut_frames), requested);
   const Params& p = job.params();
   const io::InputFrame& first = job.first();
-  constexpr size_t kHeapMax = size_t(32) << 20;
-  if (size_t(first.spec.width) * size_t(first.spec.height) * sizeof(Vec3) <= kHeapMax) {
-    mallopt(M_MMAP_THRESHOLD, int(kHeapMax));
-    mallopt(M_TRIM_THRESHOLD, int(2 * kHeapMax));  // what glibc's own rule would reach
-  }
+  pipeline::configure_heap(first.spec.width, first.spec.height);
   if (!o.quiet) {
     std::cerr << "hbil: outputs: " << join_outputs(p.outputs) << "\n";
     if (!job.why_dropped().empty())

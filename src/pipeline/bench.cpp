@@ -291,6 +291,7 @@ BenchResult run_bench(const BenchSettings& s,
     for (size_t ci = 0; ci < configs.size(); ++ci) {
       ConfigResult& cr = r.configs[ci];
       const SequenceJob job(plan, configs[ci].params);
+      configure_heap(job.first().spec.width, job.first().spec.height);  // as run does
       const io::FramePattern out((scratch / "frame_####.exr").string());
       SequenceJob::Hooks hooks;
       hooks.deliver = [&](FrameResult& fr) {

@@ -1,6 +1,8 @@
 // sequence_job.cpp: see sequence_job.h.
 #include "pipeline/sequence_job.h"
 
+#include <malloc.h>
+
 #include <chrono>
 #include <future>
 #include <optional>
@@ -65,6 +67,24 @@ SequencePlan plan_sequence(const std::string& input, const std::string& frames, 
   }
   if (!cut_frames.empty()) plan.cuts = parse_cut_frames(cut_frames);
   return plan;
+}
+
+void configure_heap(int width, int height) {
+  // glibc serves buffers above its heap threshold from mmap and returns them to the system
+  // when they are freed; smaller ones stay in its heaps for reuse. The threshold is fixed here
+  // (glibc's own moves up to 32 MiB as buffers are freed): at 32 MiB where a frame's RGB
+  // float plane fits below it, with the heaps trimmed only above 64 MiB free (glibc's rule
+  // there), so that frame buffers are reused without page faults; at 1 MiB where it does not
+  // (3840x2160 and up: those planes are mapped and unmapped every frame anyway), so that the
+  // smaller buffers are returned too and add nothing to the run's peak memory. 1 MiB until
+  // the first frame's size is known.
+  constexpr size_t kHeapMax = size_t(32) << 20;
+  if (size_t(width) * size_t(height) * sizeof(Vec3) <= kHeapMax && width > 0) {
+    mallopt(M_MMAP_THRESHOLD, int(kHeapMax));
+    mallopt(M_TRIM_THRESHOLD, int(2 * kHeapMax));  // what glibc's own rule would reach
+  } else {
+    mallopt(M_MMAP_THRESHOLD, 1 << 20);
+  }
 }
 
 Overlap parse_overlap(const std::string& text) {

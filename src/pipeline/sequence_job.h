@@ -60,6 +60,10 @@ struct FrameResult {
 
 enum class Overlap { on, off, automatic };
 
+// glibc's heap thresholds for frames of width x height (0 x 0: before the size is known):
+// `hbil run` and `hbil bench` call it, so that bench times what run does.
+void configure_heap(int width, int height);
+
 // "on", "off", "auto".
 Overlap parse_overlap(const std::string& text);
 
