@@ -19,15 +19,8 @@ defaults (scene scale: metres to tens of metres, interior); it is not test data.
 import os
 import sys
 
-from mathutils import Vector
-
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import hbil_common as H  # noqa: E402
-
-
-def look(loc, target):
-    """rotation_euler of a camera at loc looking at target (up = +Z)."""
-    return (Vector(target) - Vector(loc)).to_track_quat('-Z', 'Y').to_euler()
 
 
 def build(scene):
@@ -80,8 +73,8 @@ def build(scene):
 
     cam = H.camera("Camera", lens_mm=20.0)
     p1, p4 = (-1.5, -13.5, 2.0), (-0.6, -12.3, 2.0)
-    H.key(cam, 1, location=p1, rotation_euler=look(p1, (1.5, 10.0, 3.0)))
-    H.key(cam, 4, location=p4, rotation_euler=look(p4, (1.0, 10.0, 3.2)))
+    H.key_aimed(cam, 1, p1, (1.5, 10.0, 3.0))
+    H.key_aimed(cam, 4, p4, (1.0, 10.0, 3.2))
     H.smooth_fcurves(cam, 'BEZIER')
 
 

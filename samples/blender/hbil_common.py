@@ -245,6 +245,16 @@ def key(ob, frame, **props):
         ob.keyframe_insert(data_path=k, frame=frame)
 
 
+def look(loc, target):
+    """rotation_euler of a camera at loc looking at target (up = +Z)."""
+    return (Vector(target) - Vector(loc)).to_track_quat('-Z', 'Y').to_euler()
+
+
+def key_aimed(ob, frame, loc, target):
+    """Keys ob at frame at location loc, looking at target (look())."""
+    key(ob, frame, location=loc, rotation_euler=look(loc, target))
+
+
 def smooth_fcurves(ob, interpolation='BEZIER'):
     if ob.animation_data and ob.animation_data.action:
         for fc in ob.animation_data.action.fcurves:

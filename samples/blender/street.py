@@ -20,15 +20,8 @@ defaults (scene scale: metres to tens of metres); it is not test data.
 import os
 import sys
 
-from mathutils import Vector
-
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import hbil_common as H  # noqa: E402
-
-
-def look(loc, target):
-    """rotation_euler of a camera at loc looking at target (up = +Z)."""
-    return (Vector(target) - Vector(loc)).to_track_quat('-Z', 'Y').to_euler()
 
 
 def build(scene):
@@ -95,8 +88,8 @@ def build(scene):
 
     cam = H.camera("Camera", lens_mm=24.0)
     p1, p4 = (-0.6, -2.0, 1.7), (0.2, -0.8, 1.7)
-    H.key(cam, 1, location=p1, rotation_euler=look(p1, (0.6, 30.0, 4.0)))
-    H.key(cam, 4, location=p4, rotation_euler=look(p4, (0.0, 30.0, 4.2)))
+    H.key_aimed(cam, 1, p1, (0.6, 30.0, 4.0))
+    H.key_aimed(cam, 4, p4, (0.0, 30.0, 4.2))
     H.smooth_fcurves(cam, 'BEZIER')
 
 

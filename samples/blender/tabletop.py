@@ -20,15 +20,8 @@ import math
 import os
 import sys
 
-from mathutils import Vector
-
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import hbil_common as H  # noqa: E402
-
-
-def look(loc, target):
-    """rotation_euler of a camera at loc looking at target (up = +Z)."""
-    return (Vector(target) - Vector(loc)).to_track_quat('-Z', 'Y').to_euler()
 
 
 def cube(name, x, y, size, mat, yaw=0.0, z0=0.0):
@@ -86,8 +79,8 @@ def build(scene):
 
     cam = H.camera("Camera", lens_mm=50.0)
     p1, p4 = (-0.06, -0.54, 0.40), (0.09, -0.52, 0.38)
-    H.key(cam, 1, location=p1, rotation_euler=look(p1, (0.02, 0.0, 0.02)))
-    H.key(cam, 4, location=p4, rotation_euler=look(p4, (0.05, 0.0, 0.02)))
+    H.key_aimed(cam, 1, p1, (0.02, 0.0, 0.02))
+    H.key_aimed(cam, 4, p4, (0.05, 0.0, 0.02))
     H.smooth_fcurves(cam, 'BEZIER')
 
 

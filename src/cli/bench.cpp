@@ -2,8 +2,6 @@
 // on the user's own shot (pipeline/bench.h).
 #include "pipeline/bench.h"
 
-#include <tbb/global_control.h>
-
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
@@ -17,20 +15,21 @@ namespace hbil::cli {
 namespace {
 
 struct BenchOptions {
-  std::string shot, out_dir, frames, mask = "auto";
-  std::vector<std::string> presets, sets, sweeps, refs, renders;
-  int runs = 1, threads = 0;
-  bool quiet = false, stability = false;
+  ShotOptions shot;
+  std::string out_dir;
+  std::vector<std::string> presets, sets, sweeps, renders;
+  int runs = 1;
+  bool stability = false;
 };
 
 void bench(const BenchOptions& o) {
   pipeline::BenchSettings s;
-  s.shot = o.shot;
-  s.frames = o.frames;
+  s.shot = o.shot.shot;
+  s.frames = o.shot.frames;
   s.runs = o.runs;
-  s.mask.mask = o.mask;
+  s.mask.mask = o.shot.mask;
   s.stability = o.stability;
-  for (const std::string& r : o.refs) s.refs.push_back(pipeline::parse_bench_reference(r));
+  for (const std::string& r : o.shot.refs) s.refs.push_back(pipeline::parse_bench_reference(r));
   for (const std::string& r : o.renders) s.renders.push_back(pipeline::parse_bench_render(r));
   std::vector<pipeline::BenchConfig> bases;
   auto with_sets = [&](Params p) {
@@ -42,12 +41,9 @@ void bench(const BenchOptions& o) {
     bases.push_back({std::filesystem::path(f).stem().string(), with_sets(read_preset(f))});
   s.configs = pipeline::expand_sweeps(bases, o.sweeps);
   s.mask.background_depth = s.configs.front().params.background_depth;
-  std::unique_ptr<tbb::global_control> threads;
-  if (o.threads > 0)
-    threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
-                                                    o.threads);
+  const auto threads = o.shot.limit_threads();
   const pipeline::BenchResult r = pipeline::run_bench(s, [&](const std::string& line) {
-    if (!o.quiet) std::cerr << "hbil: " << line << "\n";
+    if (!o.shot.quiet) std::cerr << "hbil: " << line << "\n";
   });
   pipeline::write_bench(r, o.out_dir);
   // The table: a row per configuration; per layer its PSNR, * on the Pareto front.
@@ -94,21 +90,18 @@ void add_bench(CLI::App& app) {
   auto o = std::make_shared<BenchOptions>();
   CLI::App* cmd = app.add_subcommand(
       "bench", "speed against accuracy of presets and parameter sweeps on a shot, with a chart");
-  cmd->add_option("SHOT", o->shot, "input EXR frame pattern (or one file), as for run")->required();
   cmd->add_option("-o,--output", o->out_dir,
                   "folder for bench.json, bench.csv, chart.svg and chart.png")
       ->required();
-  cmd->add_option("--ref", o->refs,
-                  "LAYER=PATTERN:EXPRESSION: a layer's reference, e.g. "
-                  "ao='ref/frame_####.exr:AO', indirect='ref/frame_####.exr:DiffCol*DiffInd'; "
-                  "repeatable, at least one")
-      ->required();
+  o->shot.add_to(*cmd,
+                 "LAYER=PATTERN:EXPRESSION: a layer's reference, e.g. "
+                 "ao='ref/frame_####.exr:AO', indirect='ref/frame_####.exr:DiffCol*DiffInd'; "
+                 "repeatable, at least one");
   cmd->add_option("--render", o->renders,
                   "PATTERN[:EXPRESSION]: a path-traced render of the frames (default "
                   "expression Combined) with its render time in the header; repeatable (one "
                   "per sample count); needs --ref composite=...")
       ->allow_extra_args(false);
-  cmd->add_option("--frames", o->frames, "frame range A-B or one frame N (default: all found)");
   cmd->add_option("--preset", o->presets,
                   "a configuration from this preset file; repeatable (default: the defaults)")
       ->check(CLI::ExistingFile)
@@ -122,16 +115,9 @@ void add_bench(CLI::App& app) {
   cmd->add_option("--runs", o->runs, "timed runs per configuration, alternated (medians)")
       ->default_val(1)
       ->check(CLI::PositiveNumber);
-  cmd->add_option("--mask", o->mask,
-                  "valid pixels: auto (reference depth, else alpha), none, or a channel name")
-      ->capture_default_str();
-  cmd->add_option("--threads", o->threads, "worker threads (0 = all cores)")
-      ->default_val(0)
-      ->check(CLI::NonNegativeNumber);
   cmd->add_flag("--stability", o->stability,
                 "also the stability figures: flicker, revealed pixels, cut, screen edge, thin "
                 "objects, bad pixels (stability.csv; man hbil, bench)");
-  cmd->add_flag("-q,--quiet", o->quiet, "no progress lines");
   cmd->callback([o] { bench(*o); });
 }
 

@@ -3,7 +3,10 @@
 // into a message and an exit code by main() alone.
 #pragma once
 
+#include <tbb/global_control.h>
+
 #include <CLI/CLI.hpp>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -22,6 +25,18 @@ struct ParamOptions {
   void add_to(CLI::App& app);
   // Defaults, then the preset file, then each --set in order. Throws Error(Exit::preset).
   Params load() const;
+};
+
+// What bench and tune are given of a shot: its frames, the references (--ref), the mask,
+// threads and quietness.
+struct ShotOptions {
+  std::string shot, frames, mask = "auto";
+  std::vector<std::string> refs;
+  int threads = 0;
+  bool quiet = false;
+  void add_to(CLI::App& cmd, const std::string& ref_help);
+  // A TBB limit for --threads N (null for 0: all cores), held while the command runs.
+  std::unique_ptr<tbb::global_control> limit_threads() const;
 };
 
 // Defaults, then the keys of a JSON preset file. Throws Error(Exit::preset).
