@@ -210,6 +210,20 @@ void equal_error_speedups(BenchResult& r) {
   }
 }
 
+io::LayerComparison compare_with_reference(const FrameResult& fr, const Params& p,
+                                           const BenchReference& ref, const io::MaskSpec& mask,
+                                           const std::vector<unsigned char>* region) {
+  std::vector<io::MemoryChannels::Channel> chans;
+  for (const io::OutputChannel& oc : io::output_plan(fr.outputs, p))
+    chans.push_back({oc.name, oc.src, oc.stride});
+  io::MemoryChannels test("hbil's frame " + std::to_string(fr.frame), fr.outputs.width,
+                          fr.outputs.height, std::move(chans));
+  io::ImageFile file(io::FramePattern(ref.pattern).path(fr.frame));
+  return io::compare_layers(test, io::parse_layer_expr("layer", ref.layer), "layer", ref.layer,
+                            file, io::parse_layer_expr("--ref " + ref.layer, ref.expr),
+                            "--ref " + ref.layer, ref.expr, mask, true, region);
+}
+
 BenchResult run_bench(const BenchSettings& s,
                       const std::function<void(const std::string&)>& progress) {
   if (s.configs.empty()) throw Error(Exit::usage, "bench: no configuration to run");
@@ -221,12 +235,11 @@ BenchResult run_bench(const BenchSettings& s,
   r.frames = plan.frames;
   r.machine = machine_description();
   const BenchReference* composite_ref = nullptr;
-  std::vector<io::LayerExpr> exprs;
   for (const BenchReference& ref : s.refs) {
     if (std::find(r.layers.begin(), r.layers.end(), ref.layer) != r.layers.end())
       throw Error(Exit::usage, "--ref " + ref.layer + " is given twice");
     r.layers.push_back(ref.layer);
-    exprs.push_back(io::parse_layer_expr("--ref " + ref.layer, ref.expr));
+    io::parse_layer_expr("--ref " + ref.layer, ref.expr);  // malformed: a usage error now
     if (ref.layer == "composite") composite_ref = &ref;
   }
   if (!s.renders.empty() && !composite_ref)
@@ -248,17 +261,8 @@ BenchResult run_bench(const BenchSettings& s,
     const SequenceJob job(plan, c.params);
     SequenceJob::Hooks hooks;
     hooks.deliver = [&](FrameResult& fr) {
-      std::vector<io::MemoryChannels::Channel> chans;
-      for (const io::OutputChannel& oc : io::output_plan(fr.outputs, job.params()))
-        chans.push_back({oc.name, oc.src, oc.stride});
-      io::MemoryChannels test("configuration " + c.name + ", frame " + std::to_string(fr.frame),
-                              fr.outputs.width, fr.outputs.height, std::move(chans));
-      for (size_t k = 0; k < s.refs.size(); ++k) {
-        const BenchReference& ref = s.refs[k];
-        io::ImageFile file(io::FramePattern(ref.pattern).path(fr.frame));
-        const io::LayerComparison lc =
-            io::compare_layers(test, io::parse_layer_expr("layer", ref.layer), "layer", ref.layer,
-                               file, exprs[k], "--ref " + ref.layer, ref.expr, s.mask, true);
+      for (const BenchReference& ref : s.refs) {
+        const io::LayerComparison lc = compare_with_reference(fr, job.params(), ref, s.mask);
         cr.errors[ref.layer].add(lc.overall);
         cr.psnr[ref.layer].push_back(lc.overall.psnr());
       }

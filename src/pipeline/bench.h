@@ -109,6 +109,14 @@ struct BenchResult {
   std::string machine;                // cores, load
 };
 
+struct FrameResult;  // sequence_job.h
+
+// A computed frame's layer `ref.layer` against its reference (the file of ref.pattern for the
+// frame), on R, G, B, over the pixels `mask` keeps (and `region`, when given).
+io::LayerComparison compare_with_reference(const FrameResult& fr, const Params& p,
+                                           const BenchReference& ref, const io::MaskSpec& mask,
+                                           const std::vector<unsigned char>* region = nullptr);
+
 // Measures every configuration's errors (one run, untimed), then times it `runs` times,
 // alternating the configurations, as `hbil run --no-display` computing the layers judged
 // (the EXRs are written to a scratch folder and removed). `progress` gets a line per run. Throws

@@ -79,21 +79,9 @@ void each_frame(const SequencePlan& plan, const Params& p,
   job.run(hooks, Overlap::off);
 }
 
-double rmse_in(const FrameResult& fr, const Params& p, const BenchReference& ref,
-               const io::MaskSpec& mask, const std::vector<unsigned char>& region,
-               ErrorStats& acc) {
-  std::vector<io::MemoryChannels::Channel> chans;
-  for (const io::OutputChannel& oc : io::output_plan(fr.outputs, p))
-    chans.push_back({oc.name, oc.src, oc.stride});
-  io::MemoryChannels test("frame " + std::to_string(fr.frame), fr.outputs.width, fr.outputs.height,
-                          std::move(chans));
-  io::ImageFile file(io::FramePattern(ref.pattern).path(fr.frame));
-  const io::LayerComparison c =
-      io::compare_layers(test, io::parse_layer_expr("layer", ref.layer), "layer", ref.layer, file,
-                         io::parse_layer_expr("--ref " + ref.layer, ref.expr), "--ref " + ref.layer,
-                         ref.expr, mask, true, &region);
-  acc.add(c.overall);
-  return c.overall.rmse();
+void rmse_in(const FrameResult& fr, const Params& p, const BenchReference& ref,
+             const io::MaskSpec& mask, const std::vector<unsigned char>& region, ErrorStats& acc) {
+  acc.add(compare_with_reference(fr, p, ref, mask, &region).overall);
 }
 
 // Thin objects: geometry pixels with, within kThinPixels along a row (or a column), a pixel
