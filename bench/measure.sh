@@ -67,7 +67,7 @@ povray_table() {
   pov_rows "$tmp/pov/frame_####.exr" "$tmp/pov1/frame_####.exr" \
     "temporal chain (default)|" \
     "single frames, bitmask, back-face thickness|--set temporal=false" \
-    "single frames, bitmask, constant thickness 0.4|--set temporal=false --set passes.backdepth=\"\"" \
+    "single frames, bitmask, no back-face layer (thickness auto)|--set temporal=false --set passes.backdepth=\"\"" \
     "single frames, horizon|--set temporal=false --set method=horizon" \
     "temporal chain, 2 in-frame bounces|--set bounces=2" \
     "temporal chain, 3 in-frame bounces|--set bounces=3"
@@ -121,7 +121,7 @@ gi() {
   local dir=$1 scene
   scene=$(basename "$dir")
   for cfg in "horizon|--set method=horizon" \
-    "bitmask, constant thickness 0.4|--set passes.backdepth=\"\"" \
+    "bitmask, no back-face layer (thickness auto)|--set passes.backdepth=\"\"" \
     "bitmask, back-face thickness (default)|"; do
     local label=${cfg%%|*} args=${cfg#*|} name spf a i c
     name="gi-$scene-${label%%,*}-${#args}"
