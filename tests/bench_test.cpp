@@ -255,11 +255,11 @@ TEST(Tune, UnknownObjectiveLayerIsUsageError) {
   const std::string in = test::kRoomPoles + "/frame_####.exr";
   const auto t =
       test::run_hbil("tune " + test::q(in) + " --frames 1 --ref " + test::q("ao=" + in + ":AO") +
-                         " --layer composite -q -o " + test::q(dir / "t.json"),
+                         " --layer composite -q -o " + test::q(dir / "new/t.json"),
                      dir.path());
   EXPECT_EQ(t.code, int(Exit::usage)) << t.err;
   EXPECT_TRUE(contains(t.err, "--layer composite: no --ref for it")) << t.err;
-  EXPECT_FALSE(fs::exists(dir / "t.json"));
+  EXPECT_FALSE(fs::exists(dir / "new")) << "no file, and no folder, from a failed tune";
 }
 
 }  // namespace

@@ -37,11 +37,12 @@ void tune(const TuneOptions& o) {
   s.budget = o.budget;
   s.tolerance_db = o.tolerance;
   const auto threads = o.shot.limit_threads();
-  // Nothing is written unless the search completes; the file appears whole or not at all.
-  const std::string tmp = io::prepare_temporary(o.output);
+  // Nothing is written (no folder either) unless the search completes; the file appears
+  // whole or not at all.
   const pipeline::TuneResult r = pipeline::run_tune(s, [&](const std::string& line) {
     if (!o.shot.quiet) std::cerr << "hbil: " << line << "\n";
   });
+  const std::string tmp = io::prepare_temporary(o.output);
   {
     std::ofstream out(tmp);
     out << r.preset.dump(2) << "\n";
