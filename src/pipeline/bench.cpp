@@ -252,13 +252,17 @@ BenchResult run_bench(const BenchSettings& s,
     validate(c.params, "bench configuration " + c.name);
   }
   r.configs.resize(configs.size());
+  // "auto" resolved once per configuration, so that its runs do not read the shot's first
+  // frame again (the results keep the configurations as given).
+  std::vector<Params> resolved;
+  for (const BenchConfig& c : configs) resolved.push_back(SequenceJob(plan, c.params).params());
   // Errors first, once per configuration (they do not change from run to run).
   for (size_t ci = 0; ci < configs.size(); ++ci) {
     const BenchConfig& c = configs[ci];
     ConfigResult& cr = r.configs[ci];
     cr.name = c.name;
     cr.params = c.params;
-    const SequenceJob job(plan, c.params);
+    const SequenceJob job(plan, resolved[ci]);
     SequenceJob::Hooks hooks;
     hooks.deliver = [&](FrameResult& fr) {
       for (const BenchReference& ref : s.refs) {
@@ -294,7 +298,7 @@ BenchResult run_bench(const BenchSettings& s,
   for (int run = 0; run < s.runs; ++run)
     for (size_t ci = 0; ci < configs.size(); ++ci) {
       ConfigResult& cr = r.configs[ci];
-      const SequenceJob job(plan, configs[ci].params);
+      const SequenceJob job(plan, resolved[ci]);
       configure_heap(job.first().spec.width, job.first().spec.height);  // as run does
       const io::FramePattern out((scratch / "frame_####.exr").string());
       SequenceJob::Hooks hooks;

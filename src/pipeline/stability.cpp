@@ -24,31 +24,32 @@ constexpr int kStaticFrames = 6, kCutFrames = 6;
 constexpr double kEdgeBand = 0.05, kThinRise = 0.10, kRecovered = 1e-3;
 constexpr int kThinPixels = 3;  // on each side: objects up to 6 pixels across
 
-// The judged layer's channels of a computed frame (alpha left out), one plane each.
-std::vector<std::vector<float>> layer_planes(const FrameResult& fr, const Params& p,
-                                             const std::string& layer) {
-  std::vector<std::vector<float>> planes;
+// The channels of a computed frame, as planes, whose name `keep` accepts.
+std::vector<std::vector<float>> planes(const FrameResult& fr, const Params& p,
+                                       const std::function<bool(const std::string&)>& keep) {
+  std::vector<std::vector<float>> out;
   const size_t n = size_t(fr.outputs.width) * fr.outputs.height;
   for (const io::OutputChannel& oc : io::output_plan(fr.outputs, p)) {
-    if (oc.name.rfind(layer + ".", 0) != 0 || oc.name == layer + ".A") continue;
+    if (!keep(oc.name)) continue;
     std::vector<float> v(n, 1.f);
     if (oc.src)
       for (size_t i = 0; i < n; ++i) v[i] = oc.src[i * oc.stride];
-    planes.push_back(std::move(v));
+    out.push_back(std::move(v));
   }
-  return planes;
+  return out;
+}
+
+// The judged layer's channels (alpha left out).
+std::vector<std::vector<float>> layer_planes(const FrameResult& fr, const Params& p,
+                                             const std::string& layer) {
+  return planes(fr, p, [&](const std::string& name) {
+    return name.rfind(layer + ".", 0) == 0 && name != layer + ".A";
+  });
 }
 
 std::vector<float> history_plane(const FrameResult& fr, const Params& p) {
-  for (const io::OutputChannel& oc : io::output_plan(fr.outputs, p))
-    if (oc.name == "history.Y") {
-      const size_t n = size_t(fr.outputs.width) * fr.outputs.height;
-      std::vector<float> v(n, 1.f);
-      if (oc.src)
-        for (size_t i = 0; i < n; ++i) v[i] = oc.src[i * oc.stride];
-      return v;
-    }
-  return {};
+  auto h = planes(fr, p, [](const std::string& name) { return name == "history.Y"; });
+  return h.empty() ? std::vector<float>{} : std::move(h.front());
 }
 
 // dir/frame_<numbers[k]>.exr linked to sources[k], with the source's camera sidecar.
@@ -260,8 +261,7 @@ StabilityFigures measure_stability(const BenchSettings& s, const BenchConfig& c,
 
   // Robustness: zero normals must give finite outputs; non-finite input must be refused.
   const io::InputFrame first = io::open_frame(first_path, f0, p);
-  Params all = c.params;  // every layer the shot can give
-  out.zero_normals_finite = false;
+  const Params& all = c.params;  // the configuration's own outputs
   if (first.has("normal")) {
     const std::vector<int> nc = first.channels.at("normal");
     const std::string path = edited_copy(first_path, scratch / "zero_normals", f0,
