@@ -9,6 +9,7 @@
 #include <cmath>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <sstream>
 
 #include "hbil/error.h"
 #include "test_util.h"
@@ -54,6 +55,34 @@ TEST(BenchOptions, ReferenceIsLayerPatternAndExpression) {
                {"'glow' is not one of hbil's layers"});
   expect_error([] { pipeline::parse_bench_reference("ao=f.exr:AO*(B"); }, Exit::usage,
                {"missing ')'"});
+}
+
+// A tag names a second reference for the same layer; the figures go under the whole name.
+TEST(BenchOptions, TaggedReferenceJudgesTheSameLayerAgain) {
+  const auto r = pipeline::parse_bench_reference("indirect@1bounce=b1/f_####.exr:DiffCol*DiffInd");
+  EXPECT_EQ(r.name, "indirect@1bounce");
+  EXPECT_EQ(r.layer, "indirect");
+  EXPECT_EQ(r.pattern, "b1/f_####.exr");
+  EXPECT_EQ(pipeline::parse_bench_reference("ao=f.exr:AO").name, "ao");
+  for (const char* bad : {"indirect@=f.exr:X", "indirect@a b=f.exr:X", "indirect@a@b=f.exr:X"})
+    expect_error([&] { pipeline::parse_bench_reference(bad); }, Exit::usage, {"the tag after"});
+  expect_error([] { pipeline::parse_bench_reference("glow@x=f.exr:AO"); }, Exit::usage,
+               {"'glow' is not one of hbil's layers"});
+}
+
+// Frame-to-frame change: sum |x_k - x_(k-1)| over sum |x_k| on the valid pixels, averaged.
+TEST(BenchChange, KnownPlanes) {
+  pipeline::TemporalChange c;
+  EXPECT_EQ(c.value(), -1);  // nothing measured
+  const std::vector<unsigned char> all = {1, 1}, first = {1, 0};
+  c.add({{1, 1}, {1, 1}}, all);
+  EXPECT_EQ(c.value(), -1);  // one frame: no change yet
+  c.add({{2, 2}, {2, 2}}, all);
+  EXPECT_DOUBLE_EQ(c.value(), 4.0 / 8.0);
+  c.add({{2, 9}, {2, 9}}, first);  // the changed pixel is not valid: no change
+  EXPECT_DOUBLE_EQ(c.value(), (0.5 + 0.0) / 2);
+  c.add({{1, 9}, {3, 9}}, first);  // |1-2| + |3-2| over 1 + 3
+  EXPECT_DOUBLE_EQ(c.value(), (0.5 + 0.0 + 0.5) / 3);
 }
 
 TEST(BenchOptions, RenderPatternAndExpression) {
@@ -199,6 +228,46 @@ TEST(BenchRun, ErrorsEqualCompareOnRunOutput) {
   EXPECT_GT(c["seconds_per_frame"].get<double>(), 0);
 }
 
+// On the static camera (identical Cycles frames): a tagged second reference for the composite
+// gives the same figures; single frames do not change at all, the chain does (it converges),
+// the reference not at all. On the cut sample the chain reports the cut at frame 4.
+TEST(BenchRun, ChangeTaggedReferencesAndCuts) {
+  test::TempDir dir(test::test_name());
+  const std::string st = test::kSourceDir + "/samples/room_static/frame_####.exr";
+  pipeline::BenchSettings s;
+  s.shot = st;
+  s.frames = "1-3";
+  Params single;
+  single.temporal = false;
+  s.configs = {{"single", single}, {"temporal", Params{}}};
+  s.refs = {pipeline::parse_bench_reference("composite=" + st + ":Combined"),
+            pipeline::parse_bench_reference("composite@again=" + st + ":Combined"),
+            pipeline::parse_bench_reference("indirect=" + st + ":DiffCol*DiffInd")};
+  const BenchResult r = pipeline::run_bench(s);
+  EXPECT_EQ(r.layers, (std::vector<std::string>{"composite", "composite@again", "indirect"}));
+  EXPECT_EQ(r.composite, "composite");
+  for (const ConfigResult& c : r.configs) {
+    EXPECT_EQ(c.errors.at("composite").sum_sq, c.errors.at("composite@again").sum_sq) << c.name;
+    EXPECT_EQ(c.psnr.at("indirect").size(), 3u);
+    EXPECT_EQ(c.reference_change.at("composite"), 0.0) << c.name;
+    EXPECT_TRUE(c.cuts.empty()) << c.name;
+  }
+  EXPECT_EQ(r.configs[0].change.at("composite"), 0.0);
+  EXPECT_GT(r.configs[1].change.at("composite"), 1e-4);
+  EXPECT_LT(r.configs[1].change.at("composite"), 0.05);
+
+  const std::string cut = test::kSourceDir + "/samples/room_cut/frame_####.exr";
+  s.shot = cut;
+  s.frames = "3-5";
+  s.configs = {{"temporal", Params{}}};
+  s.refs = {pipeline::parse_bench_reference("indirect=" + cut + ":DiffCol*DiffInd")};
+  const BenchResult rc = pipeline::run_bench(s);
+  ASSERT_EQ(rc.configs[0].cuts.size(), 1u);
+  EXPECT_EQ(rc.configs[0].cuts[0].first, 4);
+  EXPECT_TRUE(contains(rc.configs[0].cuts[0].second, "camera moved"));
+  EXPECT_GT(rc.configs[0].reference_change.at("indirect"), 0.1);  // a cut changes the image
+}
+
 TEST(BenchRun, RenderWithoutCompositeReferenceIsUsageError) {
   test::TempDir dir(test::test_name());
   const std::string in = test::kRoomPoles + "/frame_####.exr";
@@ -248,6 +317,36 @@ TEST(Tune, WritesAPresetNoWorseThanTheBase) {
       "tune " + test::q(in) + refs + " --budget 1e-6 -q -o " + test::q(dir / "n.json"), dir.path());
   ASSERT_EQ(none.code, 0) << none.err;
   EXPECT_TRUE(contains(none.out, "none was")) << none.out;
+}
+
+// --keys: only those keys are tried (every step changes one of them), the preset says so; a
+// key tune does not search is a usage error and writes nothing.
+TEST(Tune, KeysLimitTheSearch) {
+  test::TempDir dir(test::test_name());
+  const std::string in = test::kRoomPoles + "/frame_####.exr";
+  const std::string refs = " --frames 1 --ref " + test::q("ao=" + in + ":AO");
+  const auto t = test::run_hbil(
+      "tune " + test::q(in) + refs + " --keys slices,steps -o " + test::q(dir / "t.json"),
+      dir.path());
+  ASSERT_EQ(t.code, 0) << t.err;
+  size_t tried = 0;
+  std::istringstream lines(t.err);
+  for (std::string line; std::getline(lines, line);)
+    if (contains(line, "tune: ")) {
+      ++tried;
+      EXPECT_TRUE(contains(line, "tune: base") || contains(line, "tune: slices=") ||
+                  contains(line, "tune: steps="))
+          << line;
+    }
+  EXPECT_GE(tried, 5u);  // the base, 2 other slices, 3 other steps at least
+  std::ifstream f(dir / "t.json");
+  const nlohmann::json j = nlohmann::json::parse(f);
+  EXPECT_EQ(j["tuned"]["keys"], nlohmann::json({"slices", "steps"}));
+  const auto bad = test::run_hbil(
+      "tune " + test::q(in) + refs + " --keys radius -q -o " + test::q(dir / "b.json"), dir.path());
+  EXPECT_EQ(bad.code, int(Exit::usage)) << bad.err;
+  EXPECT_TRUE(contains(bad.err, "--keys radius: not a key tune searches")) << bad.err;
+  EXPECT_FALSE(fs::exists(dir / "b.json"));
 }
 
 TEST(Tune, UnknownObjectiveLayerIsUsageError) {

@@ -94,9 +94,10 @@ void add_bench(CLI::App& app) {
                   "folder for bench.json, bench.csv, chart.svg and chart.png")
       ->required();
   o->shot.add_to(*cmd,
-                 "LAYER=PATTERN:EXPRESSION: a layer's reference, e.g. "
+                 "LAYER[@TAG]=PATTERN:EXPRESSION: a layer's reference, e.g. "
                  "ao='ref/frame_####.exr:AO', indirect='ref/frame_####.exr:DiffCol*DiffInd'; "
-                 "repeatable, at least one");
+                 "repeatable, at least one (a tag names a second reference for the same "
+                 "layer: indirect@1bounce=...)");
   cmd->add_option("--render", o->renders,
                   "PATTERN[:EXPRESSION]: a path-traced render of the frames (default "
                   "expression Combined) with its render time in the header; repeatable (one "

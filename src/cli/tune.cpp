@@ -2,6 +2,7 @@
 // user's shot (pipeline/tune.h).
 #include "pipeline/tune.h"
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -20,6 +21,7 @@ struct TuneOptions {
   ShotOptions shot;
   std::string output, layer;
   double budget = 0, tolerance = 0.1;
+  std::vector<std::string> keys;
   ParamOptions params;
 };
 
@@ -36,6 +38,14 @@ void tune(const TuneOptions& o) {
   s.layer = o.layer;
   s.budget = o.budget;
   s.tolerance_db = o.tolerance;
+  for (const std::string& k : o.keys) {
+    size_t start = 0;
+    while (start <= k.size()) {
+      const size_t comma = std::min(k.find(',', start), k.size());
+      if (comma > start) s.keys.push_back(k.substr(start, comma - start));
+      start = comma + 1;
+    }
+  }
   const auto threads = o.shot.limit_threads();
   // Nothing is written (no folder either) unless the search completes; the file appears
   // whole or not at all.
@@ -65,7 +75,7 @@ void add_tune(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand(
       "tune", "search a preset for a shot against its references and write it as JSON");
   cmd->add_option("-o,--output", o->output, "the preset file to write (JSON)")->required();
-  o->shot.add_to(*cmd, "LAYER=PATTERN:EXPRESSION, as for bench; repeatable, at least one");
+  o->shot.add_to(*cmd, "LAYER[@TAG]=PATTERN:EXPRESSION, as for bench; repeatable, at least one");
   cmd->add_option("--layer", o->layer,
                   "the layer whose PSNR is the objective (default: composite when referenced, "
                   "else the first --ref)");
@@ -76,6 +86,10 @@ void add_tune(CLI::App& app) {
   cmd->add_option("--tolerance", o->tolerance, "dB below the best still accepted without --budget")
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--keys", o->keys,
+                  "k1,k2,...: search only these keys (of method, slices, steps, gather_steps, "
+                  "gather_radius, thickness, gather_thickness; default: all)")
+      ->allow_extra_args(false);
   o->params.add_to(*cmd);
   cmd->callback([o] { tune(*o); });
 }

@@ -326,7 +326,7 @@ LayerComparison compare_layers(ChannelSource& test, const LayerExpr& test_expr,
                                ChannelSource& ref, const LayerExpr& ref_expr,
                                const std::string& ref_option, const std::string& ref_text,
                                const MaskSpec& mask, bool colour_only,
-                               const std::vector<unsigned char>* region) {
+                               const std::vector<unsigned char>* region, bool keep_planes) {
   if (test.width() != ref.width() || test.height() != ref.height())
     throw Error(Exit::bad_data, test.name() + " is " + std::to_string(test.width()) + "x" +
                                     std::to_string(test.height()) + " but " + ref.name() + " is " +
@@ -351,13 +351,18 @@ LayerComparison compare_layers(ChannelSource& test, const LayerExpr& test_expr,
   for (size_t k = 0; k < n; ++k) {
     ChannelError ce{tb.channel_name(k), rb.channel_name(k), {}};
     // Evaluated even when left out: the reader hands each channel over once per use.
-    const auto a = tb.channel(k), b = rb.channel(k);
+    auto a = tb.channel(k), b = rb.channel(k);
     if (colour_only && (is_alpha(ce.test) || is_alpha(ce.reference))) continue;
     for (size_t i = 0; i < a.size(); ++i)
       if (valid[i]) ce.stats.add(a[i], b[i]);
     out.overall.add(ce.stats);
     out.channels.push_back(std::move(ce));
+    if (keep_planes) {
+      out.test_planes.push_back(std::move(a));
+      out.ref_planes.push_back(std::move(b));
+    }
   }
+  if (keep_planes) out.valid = std::move(valid);
   return out;
 }
 

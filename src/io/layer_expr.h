@@ -147,12 +147,16 @@ struct LayerComparison {
   std::vector<ChannelError> channels;
   ErrorStats overall;
   std::string mask;  // as make_mask describes it
+  // With keep_planes: the channels compared (as in `channels`) and the valid pixels.
+  std::vector<std::vector<float>> test_planes, ref_planes;
+  std::vector<unsigned char> valid;
 };
 
 // An expression of `test` against one of `ref` (one channel against several is compared with
 // each: ao.Y against AO.R, AO.G, AO.B). `colour_only`: channel pairs where either channel is
 // an alpha (its name ends in ".A" or is "A") are left out, so that a composite is judged on
-// R, G, B. `region`, when given, keeps only the valid pixels where it is non-zero. Throws
+// R, G, B. `region`, when given, keeps only the valid pixels where it is non-zero.
+// `keep_planes`: the result keeps the compared channels and the valid pixels. Throws
 // Error(Exit::bad_data) for images of different sizes, Error(Exit::usage) for channel
 // counts that do not match.
 LayerComparison compare_layers(ChannelSource& test, const LayerExpr& test_expr,
@@ -160,6 +164,7 @@ LayerComparison compare_layers(ChannelSource& test, const LayerExpr& test_expr,
                                ChannelSource& ref, const LayerExpr& ref_expr,
                                const std::string& ref_option, const std::string& ref_text,
                                const MaskSpec& mask, bool colour_only = false,
-                               const std::vector<unsigned char>* region = nullptr);
+                               const std::vector<unsigned char>* region = nullptr,
+                               bool keep_planes = false);
 
 }  // namespace hbil::io

@@ -115,15 +115,22 @@ BenchReference parse_bench_reference(const std::string& text) {
   if (eq == std::string::npos || eq == 0 || colon == std::string::npos || colon < eq + 2 ||
       colon + 1 == text.size())
     throw Error(Exit::usage, "--ref " + text +
-                                 ": expected LAYER=PATTERN:EXPRESSION, e.g. "
+                                 ": expected LAYER[@TAG]=PATTERN:EXPRESSION, e.g. "
                                  "ao='ref/frame_####.exr:AO'");
-  BenchReference r{text.substr(0, eq), text.substr(eq + 1, colon - eq - 1), text.substr(colon + 1)};
+  BenchReference r{text.substr(0, eq), "", text.substr(eq + 1, colon - eq - 1),
+                   text.substr(colon + 1)};
+  const size_t at = r.name.find('@');
+  r.layer = r.name.substr(0, at);
+  if (at != std::string::npos &&
+      (at + 1 == r.name.size() || r.name.find_first_of("@,\"= ", at + 1) != std::string::npos))
+    throw Error(Exit::usage,
+                "--ref " + text + ": the tag after '@' must be a word without @ , \" = or spaces");
   const auto& known = known_outputs();
   if (std::find(known.begin(), known.end(), r.layer) == known.end() || r.layer == "history")
     throw Error(Exit::usage, "--ref " + text + ": '" + r.layer +
                                  "' is not one of hbil's layers (ao, bentcone, irradiance, "
                                  "indirect, farfield, composite)");
-  io::parse_layer_expr("--ref " + r.layer, r.expr);  // a malformed expression: usage error
+  io::parse_layer_expr("--ref " + r.name, r.expr);  // a malformed expression: usage error
   return r;
 }
 
@@ -186,7 +193,7 @@ void equal_error_speedups(BenchResult& r) {
   std::sort(curve.begin(), curve.end());
   if (curve.empty()) return;
   for (ConfigResult& c : r.configs) {
-    const auto it = c.errors.find("composite");
+    const auto it = c.errors.find(r.composite);
     if (it == c.errors.end() || c.seconds_per_frame <= 0) continue;
     const double p = it->second.psnr();
     c.speedup_bound.clear();
@@ -210,9 +217,29 @@ void equal_error_speedups(BenchResult& r) {
   }
 }
 
+void TemporalChange::add(std::vector<std::vector<float>> planes,
+                         const std::vector<unsigned char>& valid) {
+  if (prev_.size() == planes.size()) {
+    double d = 0, m = 0;
+    for (size_t c = 0; c < planes.size(); ++c) {
+      const std::vector<float>& a = planes[c];
+      const std::vector<float>& b = prev_[c];
+      if (a.size() != b.size()) return;  // a different size: no change measured
+      for (size_t i = 0; i < a.size() && i < valid.size(); ++i)
+        if (valid[i]) {
+          d += std::fabs(double(a[i]) - b[i]);
+          m += std::fabs(double(a[i]));
+        }
+    }
+    if (m > 0) sum_ += d / m, ++terms_;
+  }
+  prev_ = std::move(planes);
+}
+
 io::LayerComparison compare_with_reference(const FrameResult& fr, const Params& p,
                                            const BenchReference& ref, const io::MaskSpec& mask,
-                                           const std::vector<unsigned char>* region) {
+                                           const std::vector<unsigned char>* region,
+                                           bool keep_planes) {
   std::vector<io::MemoryChannels::Channel> chans;
   for (const io::OutputChannel& oc : io::output_plan(fr.outputs, p))
     chans.push_back({oc.name, oc.src, oc.stride});
@@ -220,8 +247,8 @@ io::LayerComparison compare_with_reference(const FrameResult& fr, const Params& 
                           fr.outputs.height, std::move(chans));
   io::ImageFile file(io::FramePattern(ref.pattern).path(fr.frame));
   return io::compare_layers(test, io::parse_layer_expr("layer", ref.layer), "layer", ref.layer,
-                            file, io::parse_layer_expr("--ref " + ref.layer, ref.expr),
-                            "--ref " + ref.layer, ref.expr, mask, true, region);
+                            file, io::parse_layer_expr("--ref " + ref.name, ref.expr),
+                            "--ref " + ref.name, ref.expr, mask, true, region, keep_planes);
 }
 
 BenchResult run_bench(const BenchSettings& s,
@@ -235,20 +262,26 @@ BenchResult run_bench(const BenchSettings& s,
   r.frames = plan.frames;
   r.machine = machine_description();
   const BenchReference* composite_ref = nullptr;
+  std::vector<std::string> outputs;  // the layers judged, each once
   for (const BenchReference& ref : s.refs) {
-    if (std::find(r.layers.begin(), r.layers.end(), ref.layer) != r.layers.end())
-      throw Error(Exit::usage, "--ref " + ref.layer + " is given twice");
-    r.layers.push_back(ref.layer);
-    io::parse_layer_expr("--ref " + ref.layer, ref.expr);  // malformed: a usage error now
-    if (ref.layer == "composite") composite_ref = &ref;
+    if (std::find(r.layers.begin(), r.layers.end(), ref.name) != r.layers.end())
+      throw Error(Exit::usage, "--ref " + ref.name + " is given twice");
+    r.layers.push_back(ref.name);
+    if (std::find(outputs.begin(), outputs.end(), ref.layer) == outputs.end())
+      outputs.push_back(ref.layer);
+    io::parse_layer_expr("--ref " + ref.name, ref.expr);  // malformed: a usage error now
+    // The composite's reference: plain "composite", else the first tagged one.
+    if (ref.layer == "composite" && (!composite_ref || ref.name == "composite"))
+      composite_ref = &ref;
   }
+  if (composite_ref) r.composite = composite_ref->name;
   if (!s.renders.empty() && !composite_ref)
     throw Error(Exit::usage,
                 "--render needs the composite's reference: --ref composite=PATTERN:EXPRESSION");
   // Each configuration computes the layers it is judged on, and no other.
   std::vector<BenchConfig> configs = s.configs;
   for (BenchConfig& c : configs) {
-    c.params.outputs = r.layers;
+    c.params.outputs = outputs;
     validate(c.params, "bench configuration " + c.name);
   }
   r.configs.resize(configs.size());
@@ -263,15 +296,27 @@ BenchResult run_bench(const BenchSettings& s,
     cr.name = c.name;
     cr.params = c.params;
     const SequenceJob job(plan, resolved[ci]);
+    std::vector<TemporalChange> ours(s.refs.size()), theirs(s.refs.size());
     SequenceJob::Hooks hooks;
     hooks.deliver = [&](FrameResult& fr) {
-      for (const BenchReference& ref : s.refs) {
-        const io::LayerComparison lc = compare_with_reference(fr, job.params(), ref, s.mask);
-        cr.errors[ref.layer].add(lc.overall);
-        cr.psnr[ref.layer].push_back(lc.overall.psnr());
+      for (size_t k = 0; k < s.refs.size(); ++k) {
+        const BenchReference& ref = s.refs[k];
+        io::LayerComparison lc =
+            compare_with_reference(fr, job.params(), ref, s.mask, nullptr, true);
+        cr.errors[ref.name].add(lc.overall);
+        cr.psnr[ref.name].push_back(lc.overall.psnr());
+        ours[k].add(std::move(lc.test_planes), lc.valid);
+        theirs[k].add(std::move(lc.ref_planes), lc.valid);
       }
     };
+    hooks.cut = [&](int frame, const TemporalReport& t) {
+      cr.cuts.emplace_back(frame, t.cut_reason);
+    };
     job.run(hooks, Overlap::off);
+    for (size_t k = 0; k < s.refs.size(); ++k) {
+      cr.change[s.refs[k].name] = ours[k].value();
+      cr.reference_change[s.refs[k].name] = theirs[k].value();
+    }
     if (progress) {
       std::string text = "bench: " + c.name + " (" + std::to_string(ci + 1) + "/" +
                          std::to_string(configs.size()) + "):";
@@ -370,7 +415,8 @@ BenchResult run_bench(const BenchSettings& s,
     RenderResult rr;
     rr.pattern = br.pattern;
     const io::LayerExpr e = io::parse_layer_expr("--render", br.expr);
-    const io::LayerExpr ce = io::parse_layer_expr("--ref composite", composite_ref->expr);
+    const io::LayerExpr ce =
+        io::parse_layer_expr("--ref " + composite_ref->name, composite_ref->expr);
     double seconds = 0;
     for (int f : plan.frames) {
       io::ImageFile render(io::FramePattern(br.pattern).path(f));
@@ -385,8 +431,9 @@ BenchResult run_bench(const BenchSettings& s,
       const std::string samples = cycles_attribute(render.spec(), ".samples");
       rr.samples = samples.empty() ? 0 : std::atoi(samples.c_str());
       io::ImageFile ref(io::FramePattern(composite_ref->pattern).path(f));
-      rr.error.add(io::compare_layers(render, e, "--render", br.expr, ref, ce, "--ref composite",
-                                      composite_ref->expr, s.mask, true)
+      rr.error.add(io::compare_layers(render, e, "--render", br.expr, ref, ce,
+                                      "--ref " + composite_ref->name, composite_ref->expr, s.mask,
+                                      true)
                        .overall);
     }
     rr.seconds_per_frame = seconds / double(plan.frames.size());
@@ -440,6 +487,9 @@ void write_bench(const BenchResult& r, const std::string& dir) {
     jc["parameters"] = to_json(c.params);
     jc["seconds_per_frame"] = c.seconds_per_frame;
     jc["runs"] = c.run_seconds;
+    jc["cuts"] = nlohmann::json::array();
+    for (const auto& [frame, why] : c.cuts)
+      jc["cuts"].push_back({{"frame", frame}, {"reason", why}});
     jc["stages_ms"] = {{"read", c.times.read_ms},
                        {"camera", c.times.camera_ms},
                        {"compute", c.times.compute_ms},
@@ -449,6 +499,9 @@ void write_bench(const BenchResult& r, const std::string& dir) {
       jl["pareto"] = c.pareto.at(layer);
       jl["psnr_per_frame"] = nlohmann::json::array();
       for (double v : c.psnr.at(layer)) jl["psnr_per_frame"].push_back(num_or_null(v));
+      const double ch = c.change.at(layer), rch = c.reference_change.at(layer);
+      jl["change"] = ch >= 0 ? nlohmann::json(ch) : nlohmann::json(nullptr);
+      jl["reference_change"] = rch >= 0 ? nlohmann::json(rch) : nlohmann::json(nullptr);
       jc["layers"][layer] = jl;
     }
     if (c.has_stability) {
@@ -486,7 +539,7 @@ void write_bench(const BenchResult& r, const std::string& dir) {
   std::string csv =
       "kind,name,layer,seconds_per_frame,read_ms,camera_ms,compute_ms,write_ms,rmse,mean_error,"
       "psnr,"
-      "relative_rmse,energy,pareto,equal_error_speedup\n";
+      "relative_rmse,energy,pareto,equal_error_speedup,change,reference_change\n";
   auto f = [](double v) {
     char b[32];
     if (!std::isfinite(v)) return std::string(std::isinf(v) && v > 0 ? "inf" : "");
@@ -506,13 +559,14 @@ void write_bench(const BenchResult& r, const std::string& dir) {
              f(c.times.write_ms) + "," + f(e.rmse()) + "," + f(e.mean_error()) + "," + f(e.psnr()) +
              "," + f(e.relative_rmse()) + "," + f(e.energy_ratio()) + "," +
              (c.pareto.at(layer) ? "1" : "0") + "," +
-             (layer == "composite" && c.speedup > 0 ? c.speedup_bound + f(c.speedup) : "") + "\n";
+             (layer == r.composite && c.speedup > 0 ? c.speedup_bound + f(c.speedup) : "") + "," +
+             f(c.change.at(layer)) + "," + f(c.reference_change.at(layer)) + "\n";
     }
   for (const RenderResult& x : r.renders)
     csv += "render," + quoted(x.pattern + " (" + std::to_string(x.samples) + " samples)") +
            ",composite," + f(x.seconds_per_frame) + ",,,,," + f(x.error.rmse()) + "," +
            f(x.error.mean_error()) + "," + f(x.error.psnr()) + "," + f(x.error.relative_rmse()) +
-           "," + f(x.error.energy_ratio()) + ",,\n";
+           "," + f(x.error.energy_ratio()) + ",,,,\n";
   write_file("bench.csv", csv);
   // Stability: one row per configuration.
   if (!r.configs.empty() && r.configs.front().has_stability) {
@@ -555,7 +609,7 @@ void write_bench(const BenchResult& r, const std::string& dir) {
       for (auto& pt : others.points) pt.filled = false;
     p.series.push_back(front);
     if (!others.points.empty()) p.series.push_back(others);
-    if (layer == "composite" && !r.renders.empty()) {
+    if (layer == r.composite && !r.renders.empty()) {
       ChartSeries cy{"path tracer (render time)", {0.85f, 0.35f, 0.10f}, true, true, {}};
       for (const RenderResult& x : r.renders)
         cy.points.push_back({x.seconds_per_frame, x.error.psnr(),

@@ -18,10 +18,11 @@
 
 namespace hbil::pipeline {
 
-// --ref LAYER=PATTERN:EXPR: hbil's layer LAYER against EXPR over the files of PATTERN (frame
-// pattern or one file).
+// --ref LAYER[@TAG]=PATTERN:EXPR: hbil's layer LAYER against EXPR over the files of PATTERN
+// (frame pattern or one file). The figures are reported under `name` (LAYER, or LAYER@TAG
+// when one layer is judged against several references: indirect@1bounce, indirect@8bounce).
 struct BenchReference {
-  std::string layer, pattern, expr;
+  std::string name, layer, pattern, expr;
 };
 // Throws Error(Exit::usage) naming the option.
 BenchReference parse_bench_reference(const std::string& text);
@@ -81,12 +82,17 @@ struct StabilityFigures {
 struct ConfigResult {
   std::string name;
   Params params;
-  StageTimes times;                                 // medians over frames and runs
-  std::vector<double> run_seconds;                  // each run's wall clock per frame
-  double seconds_per_frame = 0;                     // median of run_seconds
-  std::map<std::string, ErrorStats> errors;         // layer -> over all frames
-  std::map<std::string, std::vector<double>> psnr;  // layer -> per frame
-  std::map<std::string, bool> pareto;               // layer -> on that layer's front
+  StageTimes times;                 // medians over frames and runs
+  std::vector<double> run_seconds;  // each run's wall clock per frame
+  double seconds_per_frame = 0;     // median of run_seconds
+  // By reference name (BenchReference::name):
+  std::map<std::string, ErrorStats> errors;         // over all frames
+  std::map<std::string, std::vector<double>> psnr;  // per frame
+  std::map<std::string, bool> pareto;               // on that reference's front
+  // Frame-to-frame change (temporal_change), of hbil's layer and of its reference; -1 for
+  // a single frame.
+  std::map<std::string, double> change, reference_change;
+  std::vector<std::pair<int, std::string>> cuts;  // frames that dropped history, and why
   bool has_stability = false;
   StabilityFigures stability;
   double speedup = 0;         // the render's time at equal composite error / ours; 0: none
@@ -103,7 +109,8 @@ struct RenderResult {
 struct BenchResult {
   std::string shot;
   std::vector<int> frames;
-  std::vector<std::string> layers;  // in --ref order
+  std::vector<std::string> layers;      // reference names, in --ref order
+  std::string composite = "composite";  // the name of the composite's reference
   std::vector<ConfigResult> configs;
   std::vector<RenderResult> renders;  // by render time
   std::string machine;                // cores, load
@@ -111,11 +118,28 @@ struct BenchResult {
 
 struct FrameResult;  // sequence_job.h
 
+// Frame-to-frame change of an image sequence: for each frame after the first, the sum over
+// its valid pixels and channels of |x_k - x_(k-1)| over the sum of |x_k|; the mean over
+// frames. A static camera's flicker; on a moving camera, to be set against the reference's.
+class TemporalChange {
+ public:
+  // planes: the channels compared; valid: the pixels that count in this frame.
+  void add(std::vector<std::vector<float>> planes, const std::vector<unsigned char>& valid);
+  double value() const { return terms_ ? sum_ / terms_ : -1; }
+
+ private:
+  std::vector<std::vector<float>> prev_;
+  double sum_ = 0;
+  int terms_ = 0;
+};
+
 // A computed frame's layer `ref.layer` against its reference (the file of ref.pattern for the
 // frame), on R, G, B, over the pixels `mask` keeps (and `region`, when given).
+// `keep_planes`: the comparison keeps the compared channels and the valid pixels.
 io::LayerComparison compare_with_reference(const FrameResult& fr, const Params& p,
                                            const BenchReference& ref, const io::MaskSpec& mask,
-                                           const std::vector<unsigned char>* region = nullptr);
+                                           const std::vector<unsigned char>* region = nullptr,
+                                           bool keep_planes = false);
 
 // Measures every configuration's errors (one run, untimed), then times it `runs` times,
 // alternating the configurations, as `hbil run --no-display` computing the layers judged

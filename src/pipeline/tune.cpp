@@ -45,17 +45,28 @@ TuneResult run_tune(const TuneSettings& s,
   TuneResult out;
   out.layer = s.layer;
   if (out.layer.empty()) {
-    out.layer = s.bench.refs.front().layer;
+    out.layer = s.bench.refs.front().name;
     for (const BenchReference& r : s.bench.refs)
-      if (r.layer == "composite") out.layer = "composite";
+      if (r.layer == "composite") {
+        out.layer = r.name;
+        break;
+      }
   }
-  if (std::none_of(s.bench.refs.begin(), s.bench.refs.end(),
-                   [&](const BenchReference& r) { return r.layer == out.layer; }))
+  const auto judged = std::find_if(s.bench.refs.begin(), s.bench.refs.end(),
+                                   [&](const BenchReference& r) { return r.name == out.layer; });
+  if (judged == s.bench.refs.end())
     throw Error(Exit::usage, "--layer " + out.layer + ": no --ref for it");
   const Params base = s.bench.configs.front().params;
+  std::vector<TuneAxis> axes = default_tune_axes(base);
+  for (const std::string& k : s.keys)
+    if (std::none_of(axes.begin(), axes.end(), [&](const TuneAxis& a) { return a.key == k; })) {
+      std::string known;
+      for (const TuneAxis& a : axes) known += (known.empty() ? "" : ", ") + a.key;
+      throw Error(Exit::usage, "--keys " + k + ": not a key tune searches (" + known + ")");
+    }
   // The shot's auto values, to place the numeric candidates around them.
   Params resolved = base;
-  resolved.outputs = {out.layer};
+  resolved.outputs = {judged->layer};
   resolved = SequenceJob(plan_sequence(s.bench.shot, s.bench.frames, 0, ""), resolved).params();
 
   std::map<std::string, ConfigResult> measured;  // by the parameters' JSON
@@ -87,7 +98,10 @@ TuneResult run_tune(const TuneSettings& s,
                     const std::function<bool(const ConfigResult&, const ConfigResult&)>& better) {
     Params cur = start;
     ConfigResult best = measure(cur, "base");
-    const std::vector<TuneAxis> axes = default_tune_axes(resolved);
+    std::vector<TuneAxis> axes;
+    for (const TuneAxis& a : default_tune_axes(resolved))
+      if (s.keys.empty() || std::find(s.keys.begin(), s.keys.end(), a.key) != s.keys.end())
+        axes.push_back(a);
     for (int pass = 0; pass < s.max_passes; ++pass) {
       bool changed = false;
       for (const TuneAxis& axis : axes)
@@ -140,19 +154,24 @@ TuneResult run_tune(const TuneSettings& s,
   out.preset = to_json(written);
   nlohmann::json refs = nlohmann::json::array();
   for (const BenchReference& r : s.bench.refs)
-    refs.push_back(r.layer + "=" + r.pattern + ":" + r.expr);
+    refs.push_back(r.name + "=" + r.pattern + ":" + r.expr);
   nlohmann::json errors;
   for (const auto& [layer, e] : best.errors)
     errors[layer] = {{"psnr", e.psnr()}, {"rmse", e.rmse()}, {"relative_rmse", e.relative_rmse()}};
   const std::time_t now = std::time(nullptr);
   char date[32];
   std::strftime(date, sizeof date, "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&now));
-  out.preset["tuned"] = {
-      {"shot", s.bench.shot}, {"frames", s.bench.frames.empty() ? "all" : s.bench.frames},
-      {"references", refs},   {"goal", out.goal},
-      {"layer", out.layer},   {"seconds_per_frame", best.seconds_per_frame},
-      {"errors", errors},     {"configurations_measured", out.steps.size()},
-      {"date", date},         {"hbil", HBIL_VERSION}};
+  out.preset["tuned"] = {{"shot", s.bench.shot},
+                         {"frames", s.bench.frames.empty() ? "all" : s.bench.frames},
+                         {"references", refs},
+                         {"goal", out.goal},
+                         {"layer", out.layer},
+                         {"seconds_per_frame", best.seconds_per_frame},
+                         {"errors", errors},
+                         {"configurations_measured", out.steps.size()},
+                         {"keys", s.keys.empty() ? nlohmann::json("all") : nlohmann::json(s.keys)},
+                         {"date", date},
+                         {"hbil", HBIL_VERSION}};
   return out;
 }
 

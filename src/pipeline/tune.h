@@ -38,6 +38,7 @@ struct TuneSettings {
   double budget = 0;    // seconds per frame; 0 = none
   double tolerance_db = 0.1;
   int max_passes = 3;
+  std::vector<std::string> keys;  // the keys searched, of default_tune_axes ("": all)
 };
 
 struct TuneStep {
