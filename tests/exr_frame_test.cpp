@@ -18,6 +18,7 @@
 
 #include "hbil/error.h"
 #include "io/camera_io.h"
+#include "io/header_size.h"
 #include "test_util.h"
 
 namespace hbil::io {
@@ -309,6 +310,62 @@ TEST_F(ExrFrame, MissingOrUnreadableFileIsInputError) {
   test::write_text(text, "this is not an image\n");
   expect_error([&] { open_frame(text, 2, Params{}); }, Exit::input,
                {"frame 2", text, "cannot read"});
+}
+
+// Memory follows the file, not the header: a data window patched far beyond what the file
+// holds is refused before anything is allocated from it.
+TEST_F(ExrFrame, HeaderClaimingMorePixelsThanTheFileHoldsIsInputError) {
+  const std::string sample = test::kRoomPoles + "/frame_0001.exr";  // 256x144, zip, 1.2 MB
+  const std::string big = file("big_0001.exr"), huge = file("huge_0001.exr");
+  test::patch_data_window(sample, big, 12000, 12000);
+  test::patch_data_window(sample, huge, 200000, 200000);
+  // 12000 x 12000 x 80 bytes is 11.5 GB uncompressed: zip (deflate, at most 1032:1) cannot
+  // store it in 1.2 MB.
+  expect_error([&] { open_frame(big, 1, Params{}); }, Exit::input,
+               {"frame 1", big, "the header claims 12000x12000 pixels", "34 channels",
+                "zip compression", "header is damaged"});
+  // Beyond hbil's own limit, whatever the file.
+  expect_error([&] { open_frame(huge, 1, Params{}); }, Exit::input,
+               {"frame 1", huge, "200000x200000", "limit of 268435456"});
+  // The unpatched copy opens.
+  test::patch_data_window(sample, file("same_0001.exr"), 256, 144);
+  EXPECT_EQ(open_frame(file("same_0001.exr"), 1, Params{}).spec.width, 256);
+}
+
+TEST(HeaderSize, BoundsFollowTheCompression) {
+  OIIO::ImageSpec spec(1000, 1000, 4, OIIO::TypeDesc::FLOAT);  // 16 MB raw
+  auto refused = [&](const std::string& compression, size_t bytes) {
+    spec.attribute("compression", compression);
+    try {
+      check_header_size(spec, true, bytes, "f.exr");
+      return false;
+    } catch (const Error& e) {
+      EXPECT_EQ(e.code(), Exit::input);
+      EXPECT_TRUE(contains(e.what(), "f.exr: the header claims 1000x1000 pixels")) << e.what();
+      return true;
+    }
+  };
+  // Uncompressed: every byte is stored (plus 16 bytes per scanline of offsets and headers).
+  EXPECT_FALSE(refused("none", 16'000'000 + 16'000));
+  EXPECT_TRUE(refused("none", 15'999'999));
+  // zip: 16 MB / 1032 = 15.5 KB, plus 63 chunks of 16 lines.
+  EXPECT_FALSE(refused("zip", 17'000));
+  EXPECT_TRUE(refused("zip", 15'000));
+  EXPECT_TRUE(refused("rle", 200'000));     // at most 64:1: 250 KB
+  EXPECT_FALSE(refused("dwaa:45", 2'000));  // lossy codecs: a loose bound only
+  // An unknown compression: only the chunk offsets (8 + 8 bytes per 256 lines at least).
+  EXPECT_FALSE(refused("future", 100));
+  EXPECT_TRUE(refused("future", 50));
+  // Tiles: 8 bytes of offset and 20 of header per tile (16 x 16 tiles of 64 x 64).
+  spec.tile_width = spec.tile_height = 64;
+  EXPECT_TRUE(refused("future", 256 * 28 - 1));
+  EXPECT_FALSE(refused("future", 256 * 28));
+  // Not an EXR, or the size unknown: the pixel limit alone.
+  EXPECT_NO_THROW(check_header_size(spec, false, 10, "f.tif"));
+  EXPECT_NO_THROW(check_header_size(spec, true, 0, "f.exr"));
+  const OIIO::ImageSpec wide(65536, 8192, 1, OIIO::TypeDesc::HALF);
+  expect_error([&] { check_header_size(wide, false, 0, "w.tif"); }, Exit::input,
+               {"w.tif: the header claims 65536x8192 pixels", "limit"});
 }
 
 TEST_F(ExrFrame, BackFaceLayerIsReadForTheBitmaskOnly) {

@@ -11,7 +11,9 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cstdint>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -205,6 +207,26 @@ inline void crop_exr(const std::string& src, const std::string& dst, int w, int 
     for (int x = 0; x < w; ++x)
       for (int c = 0; c < in.spec.nchannels; ++c) out.at(x, y, c) = in.at(x, y, c);
   write_pixels(dst, out);
+}
+
+// A copy of the OpenEXR file `src` whose header's dataWindow says w x h pixels (from
+// (0, 0)); nothing else changes, so the pixels stored no longer match it.
+inline void patch_data_window(const std::string& src, const std::string& dst, int w, int h) {
+  std::string bytes = read_text(src);
+  const std::string key("dataWindow\0box2i\0", 17);
+  const size_t at = bytes.find(key);
+  ASSERT_NE(at, std::string::npos) << src << " has no dataWindow attribute";
+  const int32_t box[4] = {0, 0, w - 1, h - 1};  // xMin, yMin, xMax, yMax (little-endian)
+  ASSERT_EQ(bytes.compare(at + key.size(), 4, std::string("\x10\0\0\0", 4)), 0);
+  std::memcpy(&bytes[at + key.size() + 4], box, sizeof box);
+  write_text(dst, bytes);
+}
+
+// A copy of `src` cut to its first `bytes` bytes.
+inline void truncate_copy(const std::string& src, const std::string& dst, size_t bytes) {
+  const std::string all = read_text(src);
+  ASSERT_LT(bytes, all.size());
+  write_text(dst, all.substr(0, bytes));
 }
 
 // A camera sidecar: the room_poles frame 1 camera with its resolution replaced.

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "hbil/error.h"
+#include "io/header_size.h"
 
 namespace hbil::io {
 
@@ -50,6 +51,7 @@ SH9 read_equirect(const std::string& path) {
   if (!in) throw Error(Exit::input, where + ": cannot read: " + OIIO::geterror());
   const OIIO::ImageSpec spec = in->spec();
   if (spec.deep) throw Error(Exit::input, where + ": deep images are not supported");
+  check_header_size(path, spec, std::string(in->format_name()) == "openexr", where);
   if (spec.nchannels < 3) {
     std::ostringstream m;
     m << where << ": " << spec.nchannels << " channel(s); an environment needs R, G, B";

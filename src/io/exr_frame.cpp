@@ -14,6 +14,7 @@
 #include "hbil/error.h"
 #include "io/camera_io.h"
 #include "io/exr_deflate.h"
+#include "io/header_size.h"
 
 namespace hbil::io {
 
@@ -83,6 +84,7 @@ InputFrame open_frame(const std::string& path, int frame, const Params& p) {
   f.openexr = std::string(in->format_name()) == "openexr";
   in->close();
   if (f.spec.deep) throw Error(Exit::input, f.where() + ": deep images are not supported");
+  check_header_size(path, f.spec, f.openexr, f.where());  // before anything is sized from it
 
   // View layer: given, or the prefix of the first channel that ends in .<normal pass>.X, else
   // .<depth pass>.Z (Blender's default is "ViewLayer"), never the back-face layer's depth

@@ -7,6 +7,7 @@
 #include <string_view>
 
 #include "hbil/error.h"
+#include "io/header_size.h"
 
 namespace hbil::io {
 
@@ -14,6 +15,7 @@ ImageFile::ImageFile(std::string path) : path_(std::move(path)) {
   in_ = OIIO::ImageInput::open(path_);
   if (!in_) throw Error(Exit::input, path_ + ": cannot read: " + OIIO::geterror());
   spec_ = in_->spec();
+  check_header_size(path_, spec_, std::string(in_->format_name()) == "openexr", path_);
 }
 
 std::vector<float> ImageFile::read(int c) {

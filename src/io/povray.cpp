@@ -14,6 +14,7 @@
 
 #include "hbil/error.h"
 #include "io/camera_io.h"
+#include "io/header_size.h"
 
 namespace hbil::io {
 
@@ -49,6 +50,7 @@ PassImage read_pass(const std::string& path, int frame, const std::string& pass,
   const std::string where = "frame " + std::to_string(frame) + " (" + path + "), " + pass + " pass";
   if (!in) throw Error(Exit::input, where + ": cannot read: " + OIIO::geterror());
   const OIIO::ImageSpec& spec = in->spec();
+  check_header_size(path, spec, std::string(in->format_name()) == "openexr", where);
   PassImage img;
   img.width = spec.width;
   img.height = spec.height;

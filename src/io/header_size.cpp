@@ -1,0 +1,104 @@
+// header_size.cpp: see header_size.h.
+#include "io/header_size.h"
+
+#include <algorithm>
+#include <cstdint>
+#include <filesystem>
+#include <sstream>
+
+#include "hbil/error.h"
+
+namespace hbil::io {
+
+namespace {
+
+// "dwaa:45" -> "dwaa".
+std::string codec(const std::string& compression) {
+  return compression.substr(0, compression.find(':'));
+}
+
+// deflate (zlib) cannot do better than 1032:1: its longest match, 258 bytes, costs at
+// least 2 bits.
+constexpr double kDeflate = 1032;
+
+}  // namespace
+
+double exr_max_compression_ratio(const std::string& compression) {
+  const std::string c = codec(compression);
+  if (c == "none") return 1;
+  // A run of up to 128 equal bytes is stored as 2 (count, value).
+  if (c == "rle") return 64;
+  if (c == "zip" || c == "zips") return kDeflate;
+  // Floats cut to 24 bits, then deflated.
+  if (c == "pxr24") return kDeflate * 4 / 3;
+  // Wavelet, then Huffman with run-length codes: a run of at most 256 16-bit values costs
+  // the value's code, the run code (1 bit each at least) and an 8-bit count.
+  if (c == "piz") return 256.0 * 16 / 10;
+  // A 4x4 block of halves (32 bytes) in 14 bytes, or 3 when flat (b44a); floats stay raw.
+  if (c == "b44") return 32.0 / 14;
+  if (c == "b44a") return 32.0 / 3;
+  // An 8x8 block of a lossy channel (128 bytes) becomes at least its DC and an end-of-block
+  // code (4 bytes), and the other channels are run-length coded (at most 64:1); either
+  // stream is then deflated.
+  if (c == "dwaa" || c == "dwab") return 64 * kDeflate;
+  return 0;
+}
+
+int exr_lines_per_chunk(const std::string& compression) {
+  const std::string c = codec(compression);
+  if (c == "none" || c == "rle" || c == "zips") return 1;
+  if (c == "zip" || c == "pxr24") return 16;
+  if (c == "piz" || c == "b44" || c == "b44a" || c == "dwaa") return 32;
+  return 256;  // dwab, and the most any compression uses
+}
+
+void check_header_size(const OIIO::ImageSpec& spec, bool openexr, size_t file_bytes,
+                       const std::string& where) {
+  const uint64_t w = uint64_t(std::max(spec.width, 0)), h = uint64_t(std::max(spec.height, 0)),
+                 d = uint64_t(std::max(spec.depth, 1));
+  const uint64_t pixels = w * h * d;  // each below 2^31: no overflow
+  std::ostringstream claim;
+  claim << where << ": the header claims " << spec.width << "x" << spec.height;
+  if (d > 1) claim << "x" << d;
+  claim << " pixels";
+  if (pixels > kMaxPixels) {
+    claim << ", more than hbil's limit of " << kMaxPixels << " (16384x16384)";
+    throw Error(Exit::input, claim.str());
+  }
+  if (!openexr || file_bytes == 0) return;
+  uint64_t pixel_bytes = 0;
+  for (int c = 0; c < spec.nchannels; ++c) pixel_bytes += spec.channelformat(c).size();
+  const std::string compression = spec.get_string_attribute("compression", "none");
+  // Chunks: tiles of the first level, or blocks of scanlines.
+  uint64_t chunks, chunk_header;
+  if (spec.tile_width > 0 && spec.tile_height > 0) {
+    chunks = (w + spec.tile_width - 1) / spec.tile_width *
+             ((h + spec.tile_height - 1) / spec.tile_height);
+    chunk_header = 20;  // tile x, y, level x, y, data size
+  } else {
+    const uint64_t lines = uint64_t(exr_lines_per_chunk(compression));
+    chunks = (h + lines - 1) / lines;
+    chunk_header = 8;  // y, data size
+  }
+  const uint64_t overhead = chunks * (8 + chunk_header);  // with the offset table's entry
+  const double ratio = exr_max_compression_ratio(compression);
+  const double raw = double(pixels) * double(pixel_bytes);
+  const bool too_many_chunks = overhead > file_bytes;
+  const bool too_much_data =
+      ratio > 0 &&
+      raw > (double(file_bytes) - double(std::min<uint64_t>(overhead, file_bytes))) * ratio;
+  if (!too_many_chunks && !too_much_data) return;
+  claim << " of " << spec.nchannels << " channels (" << uint64_t(raw) << " bytes uncompressed, "
+        << chunks << " chunks), more than " << compression << " compression can store in the "
+        << file_bytes << " bytes of the file: the header is damaged";
+  throw Error(Exit::input, claim.str());
+}
+
+void check_header_size(const std::string& path, const OIIO::ImageSpec& spec, bool openexr,
+                       const std::string& where) {
+  std::error_code ec;
+  const uintmax_t bytes = std::filesystem::file_size(path, ec);
+  check_header_size(spec, openexr, ec ? 0 : size_t(bytes), where);
+}
+
+}  // namespace hbil::io
