@@ -7,9 +7,11 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <nlohmann/json.hpp>
+#include <sstream>
 
 #include "hbil/error.h"
 #include "io/camera_io.h"
@@ -55,15 +57,20 @@ size_t pixel_bytes(const std::vector<OutputChannel>& plan) {
   return n;
 }
 
-void output_rows(const std::vector<OutputChannel>& plan, int width, int y0, int y1,
-                 unsigned char* dst) {
+std::optional<NonFinite> output_rows(const std::vector<OutputChannel>& plan, int width, int y0,
+                                     int y1, unsigned char* dst) {
   const size_t stride = pixel_bytes(plan), first = size_t(y0) * width, n = size_t(y1 - y0) * width;
+  constexpr float kHalfMax = 65504.f;  // HALF_MAX: the largest finite half
+  std::optional<NonFinite> bad;
   size_t offset = 0;
-  for (const OutputChannel& c : plan) {
+  for (size_t ch = 0; ch < plan.size(); ++ch) {
+    const OutputChannel& c = plan[ch];
     unsigned char* out = dst + offset;
     for (size_t i = 0; i < n; ++i, out += stride) {
-      const float v = c.src ? c.src[(first + i) * c.stride] : 1.f;
+      float v = c.src ? c.src[(first + i) * c.stride] : 1.f;
+      if (!std::isfinite(v) && (!bad || first + i < bad->pixel)) bad = NonFinite{first + i, ch, v};
       if (c.half) {
+        if (std::isfinite(v)) v = std::clamp(v, -kHalfMax, kHalfMax);
         const Imath::half h(v);
         std::memcpy(out, &h, 2);
       } else {
@@ -72,6 +79,7 @@ void output_rows(const std::vector<OutputChannel>& plan, int width, int y0, int 
     }
     offset += c.half ? 2 : 4;
   }
+  return bad;
 }
 
 std::string camera_json(const Camera& c) {
@@ -110,8 +118,8 @@ std::string prepare_temporary(const std::string& final_path, const std::string& 
 }
 
 std::string write_temporary(const std::string& final_path, const AoFrame& f,
-                            const OIIO::ImageSpec& input_header, const Params& p,
-                            const Camera& cam) {
+                            const OIIO::ImageSpec& input_header, const Params& p, const Camera& cam,
+                            std::optional<int> frame) {
   const fs::path tmp = prepare_temporary(final_path);
   std::error_code ec;
   const std::vector<OutputChannel> plan = output_plan(f, p);
@@ -151,11 +159,26 @@ std::string write_temporary(const std::string& final_path, const AoFrame& f,
   const size_t row_bytes = size_t(f.width) * pixel_bytes(plan);
   std::vector<unsigned char> strip(size_t(kStrip) * row_bytes);
   bool ok = out->open(tmp.string(), spec);
+  std::vector<std::optional<NonFinite>> bad(kStrip);  // per row of the strip
   for (int y0 = 0; ok && y0 < f.height; y0 += kStrip) {
     const int y1 = std::min(y0 + kStrip, f.height);
     tbb::parallel_for(y0, y1, [&](int y) {
-      output_rows(plan, f.width, y, y + 1, strip.data() + size_t(y - y0) * row_bytes);
+      bad[y - y0] = output_rows(plan, f.width, y, y + 1, strip.data() + size_t(y - y0) * row_bytes);
     });
+    for (int y = y0; y < y1; ++y)
+      if (const std::optional<NonFinite>& b = bad[y - y0]) {
+        out->close();
+        fs::remove(tmp, ec);
+        std::ostringstream m;
+        if (frame)
+          m << "frame " << *frame << " (" << final_path << ")";
+        else
+          m << final_path;
+        m << ": layer " << plan[b->channel].name << ": non-finite value " << b->value
+          << " at pixel (" << b->pixel % size_t(f.width) << ", " << b->pixel / size_t(f.width)
+          << "); nothing was written (a defect in hbil: please report it with this frame)";
+        throw Error(Exit::failure, m.str());
+      }
     ok = out->write_scanlines(y0, y1, 0, OIIO::TypeUnknown, strip.data());
   }
   if (!ok || !out->close()) {

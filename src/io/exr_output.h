@@ -13,6 +13,7 @@
 #include <OpenImageIO/imageio.h>
 
 #include <filesystem>
+#include <optional>
 #include <set>
 #include <string>
 #include <utility>
@@ -36,18 +37,31 @@ struct OutputChannel {
 std::vector<OutputChannel> output_plan(const AoFrame& f, const Params& p);
 // Bytes of one pixel of the plan (4 per float channel, 2 per half).
 size_t pixel_bytes(const std::vector<OutputChannel>& plan);
+// A value that cannot be written: a NaN or an infinity.
+struct NonFinite {
+  size_t pixel = 0;    // index in the image, y * width + x
+  size_t channel = 0;  // in the plan
+  float value = 0;
+};
 // Rows [y0, y1) of the output, each pixel's channels packed in the plan's order and formats.
-void output_rows(const std::vector<OutputChannel>& plan, int width, int y0, int y1,
-                 unsigned char* dst);
+// A finite value beyond the range of a half channel is stored as the largest half of its
+// sign (±65504), not as an infinity. Returns the first non-finite value met (lowest pixel,
+// then channel), which is packed as it is: the caller must not write the rows then.
+std::optional<NonFinite> output_rows(const std::vector<OutputChannel>& plan, int width, int y0,
+                                     int y1, unsigned char* dst);
 
 // The camera as the JSON stored in hbil:camera.
 std::string camera_json(const Camera& c);
 
 // Writes the requested layers of `f` to a temporary file beside `final_path` (creating its
-// folder) and returns the temporary's path. Throws Error(Exit::output).
+// folder) and returns the temporary's path. Throws Error(Exit::output) when the file cannot
+// be written. No output holds a NaN or an infinity: every value is checked as it is packed,
+// and a non-finite one is an internal error, Error(Exit::failure), naming the frame (when
+// `frame` is given), the file, the channel, the pixel and the value; the temporary is
+// removed then.
 std::string write_temporary(const std::string& final_path, const AoFrame& f,
-                            const OIIO::ImageSpec& input_header, const Params& p,
-                            const Camera& cam);
+                            const OIIO::ImageSpec& input_header, const Params& p, const Camera& cam,
+                            std::optional<int> frame = std::nullopt);
 
 // Creates final_path's folder and returns a hidden, unique temporary name beside it,
 // ".<stem>.hbil-tmp-<tag><pid>-<n><extension>" (the extension kept so OIIO picks the same

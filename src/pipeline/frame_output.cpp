@@ -125,7 +125,8 @@ void FrameOutput::write(const FrameResult& r) {
     });
   std::exception_ptr failed;
   try {
-    batch_.add(io::write_temporary(out_path, r.outputs, r.input->spec, p_, r.camera), out_path);
+    batch_.add(io::write_temporary(out_path, r.outputs, r.input->spec, p_, r.camera, r.frame),
+               out_path);
   } catch (...) {
     failed = std::current_exception();
   }
