@@ -171,7 +171,7 @@ void add_run(CLI::App& app) {
   cmd->add_option("--preroll", o->preroll,
                   "temporal chain: compute the P frames before the first one first (not written), "
                   "so that a farm chunk starts with history")
-      ->check(CLI::NonNegativeNumber);
+      ->check(count_check("0 or a positive number of frames"));
   cmd->add_option("--cut-frames", o->cut_frames,
                   "temporal chain: frames that start a new shot (history dropped), e.g. 12,40; "
                   "cuts are also detected");
@@ -184,7 +184,7 @@ void add_run(CLI::App& app) {
   cmd->add_option("--threads", o->threads,
                   "worker threads (0 = all cores); results are identical for any count")
       ->default_val(0)
-      ->check(CLI::NonNegativeNumber);
+      ->check(count_check(kThreadsMeaning));
   cmd->add_flag("-q,--quiet", o->quiet, "no progress lines and no summary");
   cmd->add_flag(
       "-v,--verbose", o->verbose,

@@ -1,7 +1,22 @@
 // shot_options.cpp: the options bench and tune share (commands.h).
+#include <charconv>
+
 #include "cli/commands.h"
 
 namespace hbil::cli {
+
+CLI::Validator count_check(const std::string& meaning) {
+  return CLI::Validator(
+      [meaning](std::string& text) -> std::string {
+        int v = -1;
+        const char* end = text.data() + text.size();
+        const auto [ptr, ec] = std::from_chars(text.data(), end, v);
+        if (ec != std::errc() || ptr != end || v < 0)
+          return "must be " + meaning + ", got \"" + text + "\"";
+        return "";
+      },
+      "COUNT");
+}
 
 void ShotOptions::add_to(CLI::App& cmd, const std::string& ref_help) {
   cmd.add_option("SHOT", shot, "input EXR frame pattern (or one file), as for run")->required();
@@ -12,7 +27,7 @@ void ShotOptions::add_to(CLI::App& cmd, const std::string& ref_help) {
       ->capture_default_str();
   cmd.add_option("--threads", threads, "worker threads (0 = all cores)")
       ->default_val(0)
-      ->check(CLI::NonNegativeNumber);
+      ->check(count_check(kThreadsMeaning));
   cmd.add_flag("-q,--quiet", quiet, "no progress lines");
 }
 
