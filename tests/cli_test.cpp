@@ -487,6 +487,18 @@ TEST_F(Cli, UnknownPresetKeyIsExit7) {
       Exit::preset, {path("broken.json"), "not valid JSON"});
 }
 
+TEST_F(Cli, MissingOrUnreadablePresetIsExit7) {
+  copy_frame(1);
+  expect_failure(
+      run_args(in_frame(1), path("out/out_0001.exr"), "--preset " + q(path("none.json"))),
+      Exit::preset, {"--preset " + path("none.json") + ": file not found"});
+  expect_failure(run_args(in_frame(1), path("out/out_0001.exr"), "--preset " + q(path("in"))),
+                 Exit::preset, {"--preset " + path("in") + ": is a folder"});
+  const RunResult r = hbil("preset --dump --preset " + q(path("none.json")));
+  EXPECT_EQ(r.code, int(Exit::preset)) << r.err;
+  EXPECT_TRUE(contains(r.err, path("none.json"))) << r.err;
+}
+
 TEST_F(Cli, BadSetIsExit7) {
   copy_frame(1);
   expect_failure(run_args(in_frame(1), path("out/out_0001.exr"), "--set slices=0"), Exit::preset,

@@ -105,7 +105,6 @@ void add_bench(CLI::App& app) {
       ->allow_extra_args(false);
   cmd->add_option("--preset", o->presets,
                   "a configuration from this preset file; repeatable (default: the defaults)")
-      ->check(CLI::ExistingFile)
       ->allow_extra_args(false);
   cmd->add_option("--set", o->sets, "key=value applied to every configuration, as in run")
       ->allow_extra_args(false);

@@ -1,4 +1,7 @@
 // params_options.cpp: --preset and --set.
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
 #include <fstream>
 
 #include "cli/commands.h"
@@ -8,8 +11,7 @@ namespace hbil::cli {
 
 void ParamOptions::add_to(CLI::App& app) {
   app.add_option("--preset", preset,
-                 "JSON preset file (see presets/); keys not in it keep their defaults")
-      ->check(CLI::ExistingFile);
+                 "JSON preset file (see presets/); keys not in it keep their defaults");
   app.add_option("--set", sets,
                  "override one parameter: key=value, value as JSON (radius=0.5, interleave=false, "
                  "passes.depth=Depth); repeatable, applied after --preset")
@@ -24,8 +26,14 @@ void ParamOptions::add_to(CLI::App& app) {
 }
 
 Params read_preset(const std::string& path) {
+  // Missing or unreadable is a preset error (exit 7) like a malformed one, named by path.
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec))
+    throw Error(Exit::preset, "--preset " + path + ": file not found");
+  if (std::filesystem::is_directory(path, ec))
+    throw Error(Exit::preset, "--preset " + path + ": is a folder, not a JSON file");
   std::ifstream in(path);
-  if (!in) throw Error(Exit::preset, path + ": cannot read");
+  if (!in) throw Error(Exit::preset, "--preset " + path + ": cannot read: " + std::strerror(errno));
   nlohmann::json j;
   try {
     j = nlohmann::json::parse(in);
