@@ -566,6 +566,31 @@ TEST_F(Cli, InfoListsPassesCameraAndOutputs) {
   EXPECT_TRUE(contains(missing.err, path("in/none.exr"))) << missing.err;
 }
 
+// info reads the pixels run would read: a frame whose header opens but whose pixels do not
+// fails info with the exit code and the file run gives.
+TEST_F(Cli, InfoFailsOnUnreadablePixelsAsRunDoes) {
+  const RunResult ok = hbil("info " + q(sample(1)));
+  ASSERT_EQ(ok.code, 0) << ok.err;
+  EXPECT_TRUE(contains(ok.out, "pixels: read and checked: depth, normal")) << ok.out;
+  test::truncate_copy(sample(1), in_frame(1), fs::file_size(sample(1)) / 2);
+  fs::copy_file(sample(1, ".camera.json"), in_frame(1, ".camera.json"));
+  const RunResult info = hbil("info " + q(in_frame(1)));
+  const RunResult run = expect_failure(run_args(in_frame(1), path("out/out_0001.exr")), Exit::input,
+                                       {in_frame(1), "cannot read"});
+  EXPECT_EQ(info.code, int(Exit::input)) << info.err;
+  EXPECT_EQ(info.code, run.code);
+  EXPECT_TRUE(contains(info.err, "hbil: error: frame 1 (" + in_frame(1) + "): cannot read"))
+      << info.err;
+  // A non-finite depth: exit 5 from both.
+  test::copy_exr(sample(1), in_frame(1), {}, [](Pixels& p) {
+    p.at(7, 9, p.channel("ViewLayer.Depth.Z")) = std::numeric_limits<float>::infinity();
+  });
+  const RunResult nan = hbil("info " + q(in_frame(1)));
+  EXPECT_EQ(nan.code, int(Exit::bad_data)) << nan.err;
+  EXPECT_TRUE(contains(nan.err, "ViewLayer.Depth.Z")) << nan.err;
+  EXPECT_TRUE(contains(nan.err, "(7, 9)")) << nan.err;
+}
+
 TEST_F(Cli, CompareAgainstItselfAndAgainstCycles) {
   const std::string out = path("out/out_0001.exr");
   ASSERT_EQ(hbil(run_args(sample(1), out, "-q")).code, 0);

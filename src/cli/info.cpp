@@ -53,11 +53,26 @@ void info(const std::string& path, const ParamOptions& po) {
                 << ")\n";
   }
 
+  // The pixels `run` would read, read and checked as run does: a frame whose data cannot be
+  // read (truncated, damaged, a non-finite depth) fails info with run's error and exit code.
+  std::vector<std::string> fields;
+  try {
+    fields = io::fields_needed(f, io::resolve_outputs(f, p));
+  } catch (const Error& e) {
+    if (e.code() != Exit::missing_pass) throw;  // reported per output below
+  }
+  GBuffer pixels;
+  if (!fields.empty()) pixels = io::read_fields(f, fields, p);
+  pixels.width = f.spec.width;
+  pixels.height = f.spec.height;
+  std::cout << "pixels: "
+            << (fields.empty() ? "none read (no output can be computed)"
+                               : "read and checked: " + join(fields))
+            << "\n";
+
   std::cout << "camera: ";
   try {
-    GBuffer g;
-    g.width = f.spec.width;
-    g.height = f.spec.height;
+    GBuffer g = pixels;
     const Camera c = io::find_camera(f, g, p);
     std::cout << c.source << "\n  fx " << c.fx << "  fy " << c.fy << "  cx " << c.cx << "  cy "
               << c.cy;
@@ -73,7 +88,9 @@ void info(const std::string& path, const ParamOptions& po) {
   if (p.gather_radius_auto || p.thickness_auto || p.gather_thickness_auto) {
     std::cout << "auto: ";
     try {
-      GBuffer g = io::read_fields(f, {f.has("depth") ? "depth" : "position"}, p);
+      const std::string geometry = f.has("depth") ? "depth" : "position";
+      const bool read = geometry == "depth" ? !pixels.depth.empty() : !pixels.position.empty();
+      GBuffer g = read ? pixels : io::read_fields(f, {geometry}, p);
       std::string why;
       resolve_scene_params(p, measure_scene(g, io::find_camera(f, g, p), p), &why);
       std::cout << why << "\n";
