@@ -85,6 +85,11 @@ class Cli : public ::testing::Test {
     fs::copy_file(sample(n), base + ".exr");
     if (sidecar) fs::copy_file(sample(n, ".camera.json"), base + ".camera.json");
   }
+  // in/frame_000N.exr (+ sidecar) as links to the sample.
+  void link_frame(int n) {
+    fs::create_symlink(sample(n), in_frame(n));
+    fs::create_symlink(sample(n, ".camera.json"), in_frame(n, ".camera.json"));
+  }
   std::string in_frame(int n, const std::string& ext = ".exr") const {
     return path("in") + sample(n, ext).substr(test::kRoomPoles.size());
   }
@@ -467,6 +472,127 @@ TEST_F(Cli, MissingInputFrameFailsWithoutOutput) {
   copy_frame(2);
   expect_failure(run_args(path("in/frame_####.exr"), path("out/out_####.exr"), "--frames 1-3"),
                  Exit::input, {"frame 3", in_frame(3), "not found"});
+}
+
+// Every input of --frames is looked at before the first frame is computed: the error is the
+// only line, and frames 1 and 2 were not computed first.
+TEST_F(Cli, MissingOrUnreadableFrameFailsBeforeAnyFrameIsComputed) {
+  for (int n : {1, 2, 4}) link_frame(n);
+  RunResult r =
+      expect_failure(run_args(path("in/frame_####.exr"), path("out/out_####.exr"), "--frames 1-4"),
+                     Exit::input, {"hbil: error: frame 3 (" + in_frame(3) + "): file not found"});
+  EXPECT_FALSE(contains(r.err, "hbil: frame 1")) << "a frame was computed first:\n" << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  // A frame whose header cannot be read, after the first.
+  test::write_text(in_frame(3), "not an EXR\n");
+  r = expect_failure(run_args(path("in/frame_####.exr"), path("out/out_####.exr"), "--frames 1-4"),
+                     Exit::input, {"frame 3 (" + in_frame(3) + "): cannot read"});
+  EXPECT_FALSE(contains(r.err, "hbil: frame 1")) << r.err;
+  // The same for pre-roll frames, and without --frames.
+  r = expect_failure(
+      run_args(path("in/frame_####.exr"), path("out/out_####.exr"), "--frames 4 --preroll 3"),
+      Exit::input, {"frame 3 (" + in_frame(3) + "): cannot read"});
+  EXPECT_FALSE(contains(r.err, "pre-roll")) << r.err;
+  r = expect_failure(run_args(path("in/frame_####.exr"), path("out/out_####.exr")), Exit::input,
+                     {"frame 3 (" + in_frame(3) + "): cannot read"});
+  EXPECT_FALSE(contains(r.err, "hbil: frame 1")) << r.err;
+}
+
+// Without --frames a missing frame is a gap: the frame after it starts without history
+// (history.Y = 1 on every pixel) and the log says why; frames rendered on twos are no gap.
+TEST_F(Cli, GapInTheSequenceDropsTheHistory) {
+  for (int n : {1, 2, 4}) link_frame(n);
+  const std::string outputs = "--no-display --set 'outputs=[\"ao\",\"history\"]'";
+  const RunResult r = hbil(run_args(path("in/frame_####.exr"), path("out/gap_####.exr"), outputs));
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(contains(r.err, "hbil: frame 4: cut (frame 3 missing), history dropped")) << r.err;
+  EXPECT_FALSE(contains(r.err, "frame 2: cut")) << r.err;
+  auto history = [&](const std::string& file) {
+    const Pixels px = test::read_pixels(path(file));
+    const int c = px.channel("history.Y");
+    EXPECT_GE(c, 0) << file;
+    double max = 0, sum = 0;
+    size_t n = 0;
+    for (int y = 0; c >= 0 && y < px.spec.height; ++y)
+      for (int x = 0; x < px.spec.width; ++x)
+        if (const float h = px.at(x, y, c); h > 0) max = std::max<double>(max, h), sum += h, ++n;
+    return std::pair{max, n ? sum / double(n) : 0.0};
+  };
+  EXPECT_GT(history("out/gap_0002.exr").second, 1.8) << "frame 2 accumulates frame 1";
+  EXPECT_EQ(history("out/gap_0004.exr").first, 1.0) << "frame 4 took no history";
+
+  // Frames 1, 3, 5 only: the sequence's step is 2, the history is kept.
+  fs::remove_all(path("in"));
+  fs::create_directories(path("in"));
+  for (int n : {1, 3, 5}) link_frame(n);
+  const RunResult twos =
+      hbil(run_args(path("in/frame_####.exr"), path("out/twos_####.exr"), outputs));
+  ASSERT_EQ(twos.code, 0) << twos.err;
+  EXPECT_FALSE(contains(twos.err, "missing")) << twos.err;
+  EXPECT_GT(history("out/twos_0005.exr").second, 2.0) << "frame 5 accumulates 1 and 3";
+}
+
+// A zero-length normal on geometry is taken as background: the run succeeds, every output
+// is finite, and one warning per frame gives the count, the first pixel and the file.
+TEST_F(Cli, ZeroLengthNormalsWarnAndAreBackground) {
+  test::copy_exr(sample(1), in_frame(1), {}, [](Pixels& p) {
+    const int n = p.channel("ViewLayer.Normal.X"), d = p.channel("ViewLayer.Depth.Z");
+    for (int y = 50; y < 53; ++y)
+      for (int x = 100; x < 104; ++x) {
+        ASSERT_LT(p.at(x, y, d), 1e9f) << "the block must be geometry";
+        for (int c = 0; c < 3; ++c) p.at(x, y, n + c) = 0.f;
+      }
+  });
+  fs::copy_file(sample(1, ".camera.json"), in_frame(1, ".camera.json"));
+  const RunResult r = hbil(run_args(in_frame(1), path("out/z_0001.exr"), "-q --no-display"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(r.err, "hbil: warning: frame 1 (" + in_frame(1) +
+                       "): 12 pixels with a zero-length normal, the first at (100, 50), taken as "
+                       "background\n")
+      << "printed once, with --quiet too";
+  const Pixels px = test::read_pixels(path("out/z_0001.exr"));
+  ASSERT_EQ(px.spec.width, kSampleW);
+  for (float v : px.data) ASSERT_TRUE(std::isfinite(v));
+  // As background: AO 1 in the block.
+  EXPECT_EQ(px.at(101, 51, px.channel("ao.Y")), 1.f);
+  // The sample itself has none.
+  const RunResult clean = hbil(run_args(sample(1), path("out/c_0001.exr"), "-q --no-display"));
+  ASSERT_EQ(clean.code, 0) << clean.err;
+  EXPECT_EQ(clean.err, "");
+}
+
+TEST_F(Cli, NegativeCountsAreUsageErrorsWithAPlainMessage) {
+  copy_frame(1);
+  RunResult r =
+      expect_failure(run_args(in_frame(1), path("out/out_0001.exr"), "--threads -1"), Exit::usage,
+                     {"--threads: must be 0 (all cores) or a positive count, got \"-1\""});
+  EXPECT_LT(r.err.size(), 300u) << r.err;
+  r = expect_failure(run_args(in_frame(1), path("out/out_0001.exr"), "--threads 2.5"), Exit::usage,
+                     {"--threads: must be 0 (all cores) or a positive count"});
+  r = expect_failure(run_args(path("in/frame_####.exr"), path("out/out_####.exr"), "--preroll -2"),
+                     Exit::usage, {"--preroll: must be 0 or a positive number of frames"});
+  EXPECT_LT(r.err.size(), 300u) << r.err;
+  r = expect_failure(
+      "bench " + q(in_frame(1)) + " -o " + q(path("out/b")) + " --ref ao=x.exr:AO --threads -1",
+      Exit::usage, {"--threads: must be 0 (all cores) or a positive count"});
+}
+
+// A header that claims more pixels than its file can hold: exit 3 naming the file, from
+// run and from info, before anything is allocated from it.
+TEST_F(Cli, HeaderLargerThanItsFileIsAnInputError) {
+  test::patch_data_window(sample(1), in_frame(1), 12000, 12000);
+  fs::copy_file(sample(1, ".camera.json"), in_frame(1, ".camera.json"));
+  expect_failure(run_args(in_frame(1), path("out/out_0001.exr")), Exit::input,
+                 {"hbil: error: frame 1 (" + in_frame(1) + "): the header claims 12000x12000",
+                  "header is damaged"});
+  RunResult r = hbil("info " + q(in_frame(1)));
+  EXPECT_EQ(r.code, int(Exit::input)) << r.err;
+  EXPECT_TRUE(contains(r.err, in_frame(1) + "): the header claims 12000x12000")) << r.err;
+  test::patch_data_window(sample(1), in_frame(1), 200000, 200000);
+  r = hbil("info " + q(in_frame(1)));
+  EXPECT_EQ(r.code, int(Exit::input)) << r.err;
+  EXPECT_TRUE(contains(r.err, in_frame(1) + "): the header claims 200000x200000")) << r.err;
+  EXPECT_FALSE(contains(r.err, "bad_alloc")) << r.err;
 }
 
 TEST_F(Cli, NoCameraFailsWithoutOutput) {

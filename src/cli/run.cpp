@@ -129,6 +129,10 @@ void run(const RunOptions& o) {
       std::cerr << clear << "hbil: frame " << frame << ": cut (" << rep.cut_reason
                 << "), history dropped\n";
   };
+  // Warnings are printed with --quiet too: they say something about the result.
+  hooks.warning = [&](int, const std::string& message) {
+    std::cerr << clear << "hbil: warning: " << message << "\n";
+  };
   hooks.preroll_done = [&](int frame, size_t k, size_t n, double seconds) {
     if (o.quiet) return;
     char line[256];

@@ -78,6 +78,31 @@ std::vector<Vec3>* GBuffer::rgb(const std::string& field) {
   return nullptr;
 }
 
+namespace {
+
+bool covered(const GBuffer& g, const Params& p, size_t i) {
+  if (!g.alpha.empty() && !(g.alpha[i] > 0.f)) return false;
+  if (!g.depth.empty()) return g.depth[i] < p.background_depth;
+  const Vec3& w = g.position[i];
+  return !(w.x == 0 && w.y == 0 && w.z == 0);  // Blender background
+}
+
+}  // namespace
+
+ZeroNormals find_zero_normals(const GBuffer& g, const Params& p) {
+  ZeroNormals z;
+  if (g.normal.size() != g.pixels() || (g.depth.empty() && g.position.size() != g.pixels()))
+    return z;
+  for (size_t i = 0; i < g.pixels(); ++i) {
+    const Vec3& n = g.normal[i];
+    if (n.x == 0 && n.y == 0 && n.z == 0 && covered(g, p, i)) {
+      if (z.count == 0) z.first = i;
+      ++z.count;
+    }
+  }
+  return z;
+}
+
 ViewGBuffer make_view_gbuffer(const GBuffer& g, const Camera& cam, const Params& p) {
   ViewGBuffer v;
   v.width = g.width;

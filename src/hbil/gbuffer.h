@@ -82,4 +82,16 @@ struct ViewGBuffer {
 // visible surface is itself a back face, or a single-sided surface), it is −1.
 ViewGBuffer make_view_gbuffer(const GBuffer& g, const Camera& cam, const Params& p);
 
+// The pixels that are background only because their normal has zero length (all three
+// components 0): covered (alpha > 0 or no alpha), in front of the background (depth below
+// background_depth, or without depth a non-zero position), yet without a direction. Blender
+// writes such normals nowhere but the background, so they mark a broken or foreign normal
+// pass; make_view_gbuffer takes them for background (they neither receive nor occlude) and
+// the caller warns. `first`: the lowest such pixel index (valid when count > 0).
+struct ZeroNormals {
+  size_t count = 0;
+  size_t first = 0;
+};
+ZeroNormals find_zero_normals(const GBuffer& g, const Params& p);
+
 }  // namespace hbil

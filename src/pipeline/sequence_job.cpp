@@ -97,6 +97,10 @@ Overlap parse_overlap(const std::string& text) {
 SequenceJob::SequenceJob(SequencePlan plan, const Params& requested) : plan_(std::move(plan)) {
   const int f = plan_.frames.front();
   first_ = io::open_frame(plan_.input.path(f), f, requested);
+  // Every input is there and has a readable header before anything is computed.
+  for (const std::vector<int>* frames : {&plan_.preroll, &plan_.frames})
+    for (int other : *frames)
+      if (other != f) io::open_frame(plan_.input.path(other), other, requested);
   p_ = io::resolve_outputs(first_, requested, &why_dropped_);
   if (p_.gather_radius_auto || p_.thickness_auto || p_.gather_thickness_auto) {
     // From the depth (else position) and camera of the sequence's first frame on disk, not
@@ -128,6 +132,7 @@ void SequenceJob::run(const Hooks& hooks, Overlap overlap_mode, const SH9* envir
     io::InputFrame in;
     GBuffer g;
     Camera cam;
+    ZeroNormals zero;
     double read_ms = 0, camera_ms = 0;
   };
   auto load = [this](int frame) {
@@ -136,6 +141,7 @@ void SequenceJob::run(const Hooks& hooks, Overlap overlap_mode, const SH9* envir
     l.in = io::open_frame(plan_.input.path(frame), frame, p_);
     // Colour fields stored as half stay half until the frame's geometry is done with.
     l.g = io::read_fields(l.in, io::fields_needed(l.in, p_), p_, true);
+    l.zero = find_zero_normals(l.g, p_);
     const auto t_read = Clock::now();
     l.cam = io::find_camera(l.in, l.g, p_);
     l.read_ms = ms(t0, t_read);
@@ -146,6 +152,11 @@ void SequenceJob::run(const Hooks& hooks, Overlap overlap_mode, const SH9* envir
   std::vector<int> order = plan_.preroll;
   order.insert(order.end(), plan_.frames.begin(), plan_.frames.end());
   const bool temporal = p_.temporal && order.size() > 1;
+  // The sequence's step: frames rendered on twos are no gap.
+  int step = 0;
+  for (size_t k = 1; k < order.size(); ++k)
+    if (order[k] > order[k - 1] && (step == 0 || order[k] - order[k - 1] < step))
+      step = order[k] - order[k - 1];
   std::optional<TemporalChain> chain;
   if (temporal) chain.emplace(p_);
   const bool overlap = overlaps(overlap_mode);
@@ -190,11 +201,29 @@ void SequenceJob::run(const Hooks& hooks, Overlap overlap_mode, const SH9* envir
                                         std::to_string(width) + "x" + std::to_string(height) +
                                         " of " + first_path);
       }
+      if (cur.zero.count > 0 && hooks.warning) {
+        const size_t i = cur.zero.first;
+        std::ostringstream s;
+        s << in.where() << ": " << cur.zero.count << " pixel" << (cur.zero.count > 1 ? "s" : "")
+          << " with a zero-length normal, the first at (" << i % size_t(in.spec.width) << ", "
+          << i / size_t(in.spec.width) << "), taken as background";
+        hooks.warning(frame, s.str());
+      }
+      // A missing frame in between: its history would be two frames old, and wrong where
+      // anything moved.
+      std::string gap;
+      if (chain && k > 0 && order[k] - order[k - 1] > step) {
+        const int a = order[k - 1] + step, b = frame - step;
+        gap = a == b ? "frame " + std::to_string(a) + " missing"
+                     : "frames " + std::to_string(a) + "-" + std::to_string(b) + " missing";
+      }
       const auto t_compute = Clock::now();
       TemporalReport rep;
-      AoFrame result = chain ? chain->process(std::move(cur.g), cur.cam, frame,
-                                              plan_.cuts.count(frame) > 0, environment, &rep)
-                             : (cur.g.unpack(), compute_ao_frame(cur.g, cur.cam, p_, environment));
+      AoFrame result =
+          chain ? chain->process(std::move(cur.g), cur.cam, frame,
+                                 plan_.cuts.count(frame) > 0 || !gap.empty(), environment, &rep)
+                : (cur.g.unpack(), compute_ao_frame(cur.g, cur.cam, p_, environment));
+      if (!gap.empty() && rep.cut) rep.cut_reason = gap;
       const double compute_ms = ms(t_compute, Clock::now());
       if (!overlap && preroll) read_next();
       if (rep.cut && hooks.cut) hooks.cut(frame, rep);

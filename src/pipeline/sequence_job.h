@@ -70,7 +70,9 @@ Overlap parse_overlap(const std::string& text);
 class SequenceJob {
  public:
   // Opens the first frame and resolves outputs "auto" on its header: every frame then
-  // computes the same layers, and a later frame that lacks a pass is an error.
+  // computes the same layers, and a later frame that lacks a pass is an error. Opens the
+  // header of every other planned frame too, so that a missing or unreadable input is
+  // Error(Exit::input) before any frame is computed.
   SequenceJob(SequencePlan plan, const Params& requested);
 
   const SequencePlan& plan() const { return plan_; }
@@ -94,7 +96,14 @@ class SequenceJob {
     std::function<void(int frame, const TemporalReport&)> cut;
     // A pre-roll frame computed: its number, k of n, seconds.
     std::function<void(int frame, size_t k, size_t n, double seconds)> preroll_done;
+    // Something about a frame's input worth a word that does not stop the run (pixels with
+    // a zero-length normal, taken as background), on the calling thread, before the frame
+    // is computed. The message names the frame, the file and the first pixel concerned.
+    std::function<void(int frame, const std::string& message)> warning;
   };
+  // With a temporal chain, a gap in the frame numbers drops the history: a frame whose
+  // predecessor at the sequence's step (the smallest difference between its frame numbers)
+  // is missing is computed as after a cut, with the reason "frame N missing".
   void run(const Hooks& hooks, Overlap overlap = Overlap::automatic,
            const SH9* environment = nullptr) const;
 

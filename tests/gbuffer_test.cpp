@@ -1,0 +1,99 @@
+// gbuffer_test.cpp: the view-space G-buffer (gbuffer.h): pixels with a zero-length normal
+// are found, and are taken for background by the whole chain.
+#include "hbil/gbuffer.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <vector>
+
+#include "analytic_scenes.h"
+#include "hbil/ao_frame.h"
+
+namespace hbil {
+namespace {
+
+// The busy scene with colour passes, so that every output layer is computed.
+GBuffer lit_scene(Camera& cam) {
+  GBuffer g = test::busy_scene(cam);
+  g.diffcol.assign(g.pixels(), Vec3{0.8f, 0.5f, 0.2f});
+  g.diffdir.assign(g.pixels(), Vec3{1, 1, 1});
+  return g;
+}
+
+// A block of geometry pixels, [x0, x0 + 6) x [y0, y0 + 4).
+constexpr int kX0 = 60, kY0 = 40, kBw = 6, kBh = 4;
+
+template <typename F>
+void for_block(const GBuffer& g, F&& f) {
+  for (int y = kY0; y < kY0 + kBh; ++y)
+    for (int x = kX0; x < kX0 + kBw; ++x) f(size_t(y) * g.width + x);
+}
+
+TEST(ZeroNormals, AreFoundOnGeometryOnly) {
+  Camera cam;
+  GBuffer g = lit_scene(cam);
+  // Blender's background already has zero normals: none of them counts.
+  EXPECT_EQ(find_zero_normals(g, Params{}).count, 0u);
+  for_block(g, [&](size_t i) {
+    ASSERT_LT(g.depth[i], 1e9f) << "the block must be on geometry";
+    g.normal[i] = Vec3{};
+  });
+  const ZeroNormals z = find_zero_normals(g, Params{});
+  EXPECT_EQ(z.count, size_t(kBw * kBh));
+  EXPECT_EQ(z.first, size_t(kY0) * g.width + kX0);
+  // Covered by alpha 0: background whatever the normal.
+  g.alpha.assign(g.pixels(), 1.f);
+  for_block(g, [&](size_t i) { g.alpha[i] = 0; });
+  EXPECT_EQ(find_zero_normals(g, Params{}).count, 0u);
+}
+
+// A zero normal neither receives nor occludes: the frame is computed exactly as if those
+// pixels were background (depth 1e10), and every output stays finite.
+TEST(ZeroNormals, AreBackgroundForTheSearch) {
+  Camera cam;
+  GBuffer zero = lit_scene(cam);
+  for_block(zero, [&](size_t i) { zero.normal[i] = Vec3{}; });
+  GBuffer background = zero;
+  for_block(background, [&](size_t i) { background.depth[i] = 1e10f; });
+  Params p;
+  p.outputs = {"ao", "bentcone", "irradiance", "indirect", "composite"};
+  const AoFrame a = compute_ao_frame(zero, cam, p), b = compute_ao_frame(background, cam, p);
+  auto same = [](const auto& u, const auto& v, const char* layer) {
+    ASSERT_EQ(u.size(), v.size()) << layer;
+    ASSERT_FALSE(u.empty()) << layer;
+    EXPECT_EQ(0, std::memcmp(u.data(), v.data(), u.size() * sizeof(u[0]))) << layer;
+  };
+  same(a.ao, b.ao, "ao");
+  same(a.bent, b.bent, "bent");
+  same(a.cone_cos, b.cone_cos, "cone_cos");
+  same(a.irradiance, b.irradiance, "irradiance");
+  same(a.indirect, b.indirect, "indirect");
+  same(a.composite, b.composite, "composite");
+  // With its normals intact the block occludes and lights its neighbours: pixels outside
+  // it change, so the equality above is not that of a block the search never reads.
+  const AoFrame intact = compute_ao_frame(lit_scene(cam), cam, p);
+  std::vector<bool> in_block(a.ao.size(), false);
+  for_block(zero, [&](size_t i) { in_block[i] = true; });
+  size_t changed = 0;
+  for (size_t i = 0; i < a.ao.size(); ++i)
+    changed +=
+        !in_block[i] && (intact.ao[i] != a.ao[i] || intact.irradiance[i].x != a.irradiance[i].x);
+  EXPECT_GT(changed, 10u) << "pixels outside the block that the block's geometry affects";
+  for (size_t i = 0; i < a.ao.size(); ++i) {
+    ASSERT_TRUE(std::isfinite(a.ao[i]) && std::isfinite(a.cone_cos[i])) << i;
+    ASSERT_TRUE(std::isfinite(a.bent[i].x) && std::isfinite(a.bent[i].y) &&
+                std::isfinite(a.bent[i].z))
+        << i;
+    ASSERT_TRUE(std::isfinite(a.irradiance[i].x) && std::isfinite(a.composite[i].x)) << i;
+  }
+  // As background: AO 1 and a full cone at the block itself.
+  for_block(zero, [&](size_t i) {
+    EXPECT_EQ(a.ao[i], 1.f);
+    EXPECT_EQ(a.cone_cos[i], 0.f);
+  });
+}
+
+}  // namespace
+}  // namespace hbil
