@@ -5,12 +5,14 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <numbers>
 
 #include "analytic_scenes.h"
 #include "hbil/ao_frame.h"
+#include "hbil/reproject.h"
 
 namespace hbil {
 namespace {
@@ -81,20 +83,49 @@ TEST(Temporal, CameraRotationKeepsTheHistory) {
   p.feedback = false;  // the same one-bounce quantity every frame
   const Scene a = groove(0), b = groove(2);
   TemporalChain chain(p);
-  chain.process(a.g, a.cam, 1, false);
+  const AoFrame f1 = chain.process(a.g, a.cam, 1, false);
   TemporalReport rep;
   const AoFrame f = chain.process(b.g, b.cam, 2, false, nullptr, &rep);
   EXPECT_FALSE(rep.cut);
+  EXPECT_EQ(rep.reprojection, "scatter");
   EXPECT_GT(rep.history, 0.9);  // all but the strip that turned into view
-  // Accumulating the reprojected history does not move the result: it stays the single
-  // frame's (the two frames differ only by their slice rotation).
+  // Frame 2 on its own (its slice rotation), and frame 1's result reprojected into it.
   FrameInputs in;
   in.rotate = true;
   in.frame = 2;
   const Params r = resolve_frame_outputs(b.g, p);
-  const ViewGBuffer v = make_view_gbuffer(b.g, b.cam, r);
+  const ViewGBuffer va = make_view_gbuffer(a.g, a.cam, r), v = make_view_gbuffer(b.g, b.cam, r);
   const AoFrame single =
       assemble_frame(v, b.g, b.cam, r, search_frame(v, b.g, b.cam, r, in), nullptr);
+  std::vector<float> e1(3 * f1.irradiance.size());
+  std::memcpy(e1.data(), f1.irradiance.data(), e1.size() * sizeof(float));
+  const Reprojected h = reproject_scatter(
+      va, a.cam, e1, 3, v, b.cam, {float(p.history_depth_tolerance), float(p.history_normal_cos)});
+  // Where the history was accepted the pixel holds two frames: the plain mean of the two
+  // (blend weight max(1/n, 1 − history_weight) = 1/2); elsewhere the single frame.
+  const float w = std::max(0.5f, 1.f - float(p.history_weight));
+  double off_blend = 0, blend_move = 0, frame_gap = 0;
+  size_t with_history = 0;
+  for (size_t i = 0; i < b.g.pixels(); ++i) {
+    if (v.is_background(i)) continue;
+    const float s = single.irradiance[i].x;
+    const float expected = h.valid[i] ? h.value[3 * i] + w * (s - h.value[3 * i]) : s;
+    off_blend = std::max(off_blend, double(std::fabs(f.irradiance[i].x - expected)));
+    if (!h.valid[i]) continue;
+    ++with_history;
+    blend_move += std::fabs(f.irradiance[i].x - s);
+    frame_gap += std::fabs(h.value[3 * i] - s);
+  }
+  ASSERT_GT(with_history, b.g.pixels() / 2);
+  blend_move /= double(with_history);
+  frame_gap /= double(with_history);
+  RecordProperty("frame_gap", std::to_string(frame_gap));
+  EXPECT_LT(off_blend, 1e-6) << "the result is the blend of the history and the frame";
+  // The two frames' estimates differ (their slices are turned), so the blend moves the
+  // result half way towards the history; a chain that did not accumulate stays at 0.
+  EXPECT_GT(frame_gap, 1e-3);
+  EXPECT_NEAR(blend_move, 0.5 * frame_gap, 1e-6);
+  // And the history is of the same quantity: the blend stays near the single frame.
   EXPECT_LT(mean_abs_diff(b, f.irradiance, single.irradiance), 0.01);
 }
 
@@ -123,9 +154,38 @@ TEST(Temporal, CutDropsTheHistory) {
 TEST(Temporal, AutoOutputsAreResolvedOnTheFirstFrame) {
   const Scene s = groove();
   TemporalChain chain{Params{}};  // outputs "auto": the groove has DiffCol and DiffDir
-  const AoFrame f = chain.process(s.g, s.cam, 1, false);
-  EXPECT_EQ(f.irradiance.size(), s.g.pixels());
-  EXPECT_EQ(f.composite.size(), s.g.pixels());
+  Params listed;
+  listed.outputs = {"ao", "bentcone", "irradiance", "indirect", "composite"};
+  TemporalChain explicit_chain{listed};
+  for (int frame = 1; frame <= 2; ++frame) {
+    SCOPED_TRACE(frame);
+    const AoFrame f = chain.process(s.g, s.cam, frame, false);
+    const AoFrame e = explicit_chain.process(s.g, s.cam, frame, false);
+    // "auto" is exactly the five layers, computed as when they are listed.
+    auto same = [](const auto& x, const auto& y, const char* layer) {
+      ASSERT_EQ(x.size(), y.size()) << layer;
+      ASSERT_FALSE(x.empty()) << layer << " was not computed";
+      EXPECT_EQ(0, std::memcmp(x.data(), y.data(), x.size() * sizeof(x[0]))) << layer;
+    };
+    same(f.ao, e.ao, "ao");
+    same(f.bent, e.bent, "bent");
+    same(f.irradiance, e.irradiance, "irradiance");
+    same(f.indirect, e.indirect, "indirect");
+    same(f.composite, e.composite, "composite");
+    // The composite is DiffCol × (DiffDir + irradiance) (no Emit), and the unlit floor
+    // receives light from the wall.
+    double floor_e = 0;
+    size_t floor_n = 0;
+    for (size_t i = 0; i < s.g.pixels(); ++i) {
+      if (!(s.g.depth[i] < 1e9f)) continue;
+      const float expected = 0.8f * (s.g.diffdir[i].x + f.irradiance[i].x);
+      ASSERT_NEAR(f.composite[i].x, expected, 1e-6f) << i;
+      ASSERT_NEAR(f.indirect[i].x, 0.8f * f.irradiance[i].x, 1e-6f) << i;
+      if (s.g.normal[i].z > 0.99f) floor_e += f.irradiance[i].x, ++floor_n;
+    }
+    ASSERT_GT(floor_n, 0u);
+    EXPECT_GT(floor_e / double(floor_n), 0.02) << "mean irradiance on the floor";
+  }
 }
 
 TEST(Temporal, VectorPassOnlyForThePreviousFrame) {
