@@ -15,8 +15,10 @@
 namespace hbil {
 namespace {
 
-ErrorStats ao_error(const std::string& scene, const Params& p) {
-  ErrorStats all;
+// The helpers add to `all` and stop at the first fatal failure (a missing reference channel
+// must fail the test, not be indexed); their callers below return what was gathered, with the
+// test already failed.
+void add_ao_error(const std::string& scene, const Params& p, ErrorStats& all) {
   const io::FramePattern pattern(std::string(HBIL_SOURCE_DIR) + "/samples/" + scene +
                                  "/frame_####.exr");
   for (int frame = 1; frame <= 8; ++frame) {
@@ -24,13 +26,20 @@ ErrorStats ao_error(const std::string& scene, const Params& p) {
     GBuffer g = io::read_fields(in, io::fields_needed(in, p), p);
     const AoFrame f = compute_ao_frame(g, io::find_camera(in, g, p), p);
     auto img = OIIO::ImageInput::open(in.path);
+    ASSERT_TRUE(img) << in.path;
     const int c = in.spec.channelindex("ViewLayer.AO.R");
-    EXPECT_GE(c, 0);
+    ASSERT_GE(c, 0) << in.path << " has no ViewLayer.AO.R";
     std::vector<float> ref(g.pixels());
-    EXPECT_TRUE(img->read_image(0, 0, c, c + 1, OIIO::TypeDesc::FLOAT, ref.data()));
+    ASSERT_TRUE(img->read_image(0, 0, c, c + 1, OIIO::TypeDesc::FLOAT, ref.data()))
+        << img->geterror();
     for (size_t i = 0; i < g.pixels(); ++i)
       if (g.depth[i] < 1e9f) all.add(f.ao[i], ref[i]);
   }
+}
+
+ErrorStats ao_error(const std::string& scene, const Params& p) {
+  ErrorStats all;
+  add_ao_error(scene, p, all);
   return all;
 }
 
@@ -62,8 +71,7 @@ TEST(AccuracyAgainstCycles, BitmaskBeatsHorizonOnBothScenes) {
 // `indirect` (1 bounce) against Cycles' DiffCol × DiffInd rendered with 1 diffuse bounce
 // (samples/<scene>/bounce1), as `hbil compare --layer indirect --ref-layer 'DiffCol*DiffInd'`:
 // all three channels of the non-background pixels of the 8 frames.
-ErrorStats indirect_error(const std::string& scene, const Params& p) {
-  ErrorStats all;
+void add_indirect_error(const std::string& scene, const Params& p, ErrorStats& all) {
   const std::string dir = std::string(HBIL_SOURCE_DIR) + "/samples/" + scene;
   const io::FramePattern pattern(dir + "/frame_####.exr"), ref(dir + "/bounce1/frame_####.exr");
   for (int frame = 1; frame <= 8; ++frame) {
@@ -71,22 +79,28 @@ ErrorStats indirect_error(const std::string& scene, const Params& p) {
     GBuffer g = io::read_fields(in, io::fields_needed(in, p), p);
     const AoFrame f = compute_ao_frame(g, io::find_camera(in, g, p), p);
     auto img = OIIO::ImageInput::open(ref.path(frame));
-    EXPECT_TRUE(img) << ref.path(frame);
-    if (!img) continue;
-    auto layer = [&](const char* pass) {
+    ASSERT_TRUE(img) << ref.path(frame);
+    auto layer = [&](const char* pass, std::vector<float>& v) {
       const int c = img->spec().channelindex(std::string("ViewLayer.") + pass + ".R");
-      EXPECT_GE(c, 0) << pass;
-      std::vector<float> v(g.pixels() * 3);
-      EXPECT_TRUE(img->read_image(0, 0, c, c + 3, OIIO::TypeDesc::FLOAT, v.data()));
-      return v;
+      ASSERT_GE(c, 0) << ref.path(frame) << " has no ViewLayer." << pass << ".R";
+      v.resize(g.pixels() * 3);
+      ASSERT_TRUE(img->read_image(0, 0, c, c + 3, OIIO::TypeDesc::FLOAT, v.data()))
+          << img->geterror();
     };
-    const std::vector<float> col = layer("DiffCol"), ind = layer("DiffInd");
+    std::vector<float> col, ind;
+    ASSERT_NO_FATAL_FAILURE(layer("DiffCol", col));
+    ASSERT_NO_FATAL_FAILURE(layer("DiffInd", ind));
     for (size_t i = 0; i < g.pixels(); ++i)
       if (g.depth[i] < 1e9f) {
         const Vec3 v = f.indirect[i];
         for (int k = 0; k < 3; ++k) all.add((&v.x)[k], col[3 * i + k] * ind[3 * i + k]);
       }
   }
+}
+
+ErrorStats indirect_error(const std::string& scene, const Params& p) {
+  ErrorStats all;
+  add_indirect_error(scene, p, all);
   return all;
 }
 
