@@ -11,6 +11,7 @@
 
 #include "analytic_scenes.h"
 #include "hbil/ao_frame.h"
+#include "hbil/farfield.h"
 #include "hbil/interleave.h"
 
 namespace hbil {
@@ -200,20 +201,46 @@ TEST(Interleave, BlockCoversEvenlySpacedDirections) {
   for (size_t k = 0; k < all.size(); ++k) EXPECT_NEAR(all[k], kPi * (k + 0.5) / 32, 1e-6);
 }
 
+// Every output layer, for both methods, with and without interleaving: the scene has colour
+// passes (irradiance, indirect, composite), an environment (farfield) and the multi-bounce
+// AO (ao_rgb).
 TEST(Determinism, IdenticalBytesForAnyThreadCount) {
   Camera cam;
-  const GBuffer g = busy_scene(cam);
-  for (bool interleave : {true, false}) {
-    Params p;
-    p.interleave = interleave;
-    AoFrame one, many;
-    tbb::task_arena(1).execute([&] { one = compute_ao_frame(g, cam, p); });
-    tbb::task_arena(4).execute([&] { many = compute_ao_frame(g, cam, p); });
-    EXPECT_EQ(0, std::memcmp(one.ao.data(), many.ao.data(), one.ao.size() * sizeof(float)));
-    EXPECT_EQ(0, std::memcmp(one.bent.data(), many.bent.data(), one.bent.size() * sizeof(Vec3)));
-    EXPECT_EQ(0, std::memcmp(one.cone_cos.data(), many.cone_cos.data(),
-                             one.cone_cos.size() * sizeof(float)));
-  }
+  GBuffer g = busy_scene(cam);
+  g.diffcol.assign(g.pixels(), Vec3{0.8f, 0.5f, 0.2f});
+  g.diffdir.assign(g.pixels(), Vec3{});
+  for (size_t i = 0; i < g.pixels(); ++i)
+    if (g.depth[i] < 1e9f && g.normal[i].z < 0.99f) g.diffdir[i] = Vec3{1, 0.5f, 0.25f};
+  const SH9 sky = constant_environment(Vec3{0.2f, 0.3f, 0.5f});
+  for (const char* method : {"horizon", "bitmask"})
+    for (bool interleave : {true, false}) {
+      SCOPED_TRACE(std::string(method) + (interleave ? " interleaved" : " full"));
+      Params p;
+      p.method = method;
+      p.interleave = interleave;
+      p.ao_multibounce = true;
+      p.outputs = {"ao", "bentcone", "irradiance", "indirect", "composite", "farfield"};
+      AoFrame one, many;
+      tbb::task_arena(1).execute([&] { one = compute_ao_frame(g, cam, p, &sky); });
+      tbb::task_arena(4).execute([&] { many = compute_ao_frame(g, cam, p, &sky); });
+      auto same = [](const auto& a, const auto& b, const char* layer) {
+        ASSERT_EQ(a.size(), b.size()) << layer;
+        ASSERT_FALSE(a.empty()) << layer << " was not computed";
+        EXPECT_EQ(0, std::memcmp(a.data(), b.data(), a.size() * sizeof(a[0]))) << layer;
+      };
+      same(one.ao, many.ao, "ao");
+      same(one.ao_rgb, many.ao_rgb, "ao_rgb");
+      same(one.bent, many.bent, "bent");
+      same(one.cone_cos, many.cone_cos, "cone_cos");
+      same(one.irradiance, many.irradiance, "irradiance");
+      same(one.indirect, many.indirect, "indirect");
+      same(one.composite, many.composite, "composite");
+      same(one.farfield, many.farfield, "farfield");
+      // The irradiance is not trivially zero: the lit faces light the others.
+      double sum = 0;
+      for (const Vec3& e : one.irradiance) sum += e.x;
+      EXPECT_GT(sum, 1.0);
+    }
 }
 
 }  // namespace
