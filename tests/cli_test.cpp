@@ -165,7 +165,7 @@ TEST_F(Cli, RunWritesLayersAndMetadata) {
     EXPECT_EQ(preset, to_json(as_run));
     EXPECT_NEAR(preset["gather_radius"].get<double>(), 5.37, 0.01);  // 256 px x 2.99 m / 142.2 px
     EXPECT_EQ(preset["thickness"], 0.4);  // 0.15 x 2.99 m, at most 0.4 x radius
-    EXPECT_NEAR(preset["gather_thickness"].get<double>(), 0.15 * 2.986, 0.002);
+    EXPECT_NEAR(preset["gather_thickness"].get<double>(), 0.3 * 2.986, 0.002);
     EXPECT_EQ(px.spec.get_string_attribute("hbil:version"), HBIL_VERSION);
     const json cam = json::parse(px.spec.get_string_attribute("hbil:camera"));
     EXPECT_EQ(cam["source"], "sidecar frame_000" + std::to_string(frame) + ".camera.json");

@@ -43,7 +43,7 @@ TEST(SceneScale, AutoValuesFollowTheMedianDepth) {
   EXPECT_FALSE(r.gather_radius_auto || r.thickness_auto || r.gather_thickness_auto);
   EXPECT_NEAR(r.gather_radius, 11.0, 1e-5);
   EXPECT_NEAR(r.thickness, 0.4 * p.radius, 1e-9);  // 0.15 x 5.5 = 0.825, capped at 0.4 x 1
-  EXPECT_NEAR(r.gather_thickness, 0.15 * 5.5, 1e-6);
+  EXPECT_NEAR(r.gather_thickness, 0.3 * 5.5, 1e-6);
   EXPECT_TRUE(test::contains(why, "gather_radius 11")) << why;
   EXPECT_TRUE(test::contains(why, "median depth 5.5")) << why;
   // A scene 10 x smaller: everything 10 x smaller, the cap no longer reached.
@@ -52,7 +52,7 @@ TEST(SceneScale, AutoValuesFollowTheMedianDepth) {
   const Params q = resolve_scene_params(p, measure_scene(small, cam, p));
   EXPECT_NEAR(q.gather_radius, 1.1, 1e-6);
   EXPECT_NEAR(q.thickness, 0.15 * 0.55, 1e-6);
-  EXPECT_NEAR(q.gather_thickness, 0.15 * 0.55, 1e-6);
+  EXPECT_NEAR(q.gather_thickness, 0.3 * 0.55, 1e-6);
 }
 
 TEST(SceneScale, GivenValuesAreKept) {

@@ -27,7 +27,7 @@ constexpr float kGrazing = 0.1f;
 constexpr float kGrazing2 = kGrazing * kGrazing;  // the same test on squares
 // acos to 7e-5 rad (Abramowitz & Stegun 4.4.45), well under the bitmask's sector width of
 // π/32 = 0.098 rad: every angle of the bitmask method is only quantised to sectors. The
-// horizon march's angles move by as little (no accuracy figure of bench/measure.sh changes),
+// horizon march's angles move by as little (no accuracy figure of bench/tables.sh changes),
 // and std::acos was a third of its time.
 inline float fast_acos(float x) {
   const float a = std::fabs(x);

@@ -72,7 +72,7 @@ const std::vector<ParamInfo>& params_table() {
       {"gather_thickness", &Params::gather_thickness, 0, 1e6, "world units",
        "method bitmask: the thickness of the gather-only samples (between radius and "
        "gather_radius), which light and shadow irradiance but not ao; \"auto\" (default): "
-       "0.15 x the first frame's median depth where thickness is auto, else thickness"},
+       "0.3 x the first frame's median depth where thickness is auto, else thickness"},
       {"thickness_growth", &Params::thickness_growth, 0, 1e3, "per world unit",
        "method bitmask: thickness added per world unit of the sample's depth"},
       {"gather_radius", &Params::gather_radius, 0, 1e6, "world units",

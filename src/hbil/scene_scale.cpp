@@ -63,8 +63,9 @@ Params resolve_scene_params(const Params& p, const SceneScale& s, std::string* w
   }
   if (p.gather_thickness_auto) {
     // With thickness given, the gather's samples keep it, as before there were two.
-    r.gather_thickness = p.thickness_auto && measured ? thick : r.thickness;
-    say(p.thickness_auto && measured ? "gather_thickness %.3g (0.15 x the median depth)"
+    r.gather_thickness =
+        p.thickness_auto && measured ? kAutoGatherThickness * s.depth_median : r.thickness;
+    say(p.thickness_auto && measured ? "gather_thickness %.3g (0.3 x the median depth)"
                                      : "gather_thickness %.3g (= thickness)",
         r.gather_thickness);
   }
