@@ -268,6 +268,25 @@ TEST(BenchRun, ChangeTaggedReferencesAndCuts) {
   EXPECT_GT(rc.configs[0].reference_change.at("indirect"), 0.1);  // a cut changes the image
 }
 
+// A configuration with an environment gets its far field in the composite, as `hbil run`
+// gives it, though bench computes only the layers judged (no farfield layer).
+TEST(BenchRun, EnvironmentReachesTheComposite) {
+  const std::string in = test::kRoomPoles + "/frame_####.exr";
+  pipeline::BenchSettings s;
+  s.shot = in;
+  s.frames = "1";
+  Params lit;
+  lit.environment = "rgb:0.5,0.5,0.5";
+  s.configs = {{"none", Params{}}, {"lit", lit}};
+  s.refs = {pipeline::parse_bench_reference("composite=" + in + ":Combined")};
+  const BenchResult r = pipeline::run_bench(s);
+  const ErrorStats &a = r.configs[0].errors.at("composite"),
+                   &b = r.configs[1].errors.at("composite");
+  EXPECT_EQ(a.count, b.count);
+  // The far field adds light: the composite's sum grows.
+  EXPECT_GT(b.test_sum, a.test_sum * 1.001);
+}
+
 TEST(BenchRun, RenderWithoutCompositeReferenceIsUsageError) {
   test::TempDir dir(test::test_name());
   const std::string in = test::kRoomPoles + "/frame_####.exr";

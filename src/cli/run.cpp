@@ -6,14 +6,12 @@
 #include <cstdio>
 #include <iostream>
 #include <memory>
-#include <optional>
 #include <sstream>
 
 #include "cli/commands.h"
 #include "hbil/error.h"
 #include "hbil/march.h"
 #include "hbil/reduced.h"
-#include "io/environment.h"
 #include "pipeline/frame_output.h"
 #include "pipeline/sequence_job.h"
 
@@ -75,9 +73,6 @@ void run(const RunOptions& o) {
     std::cerr << "hbil: search: " << describe_search(p, first.spec.width, first.spec.height)
               << "\n";
   }
-  // Far field: the environment is projected to SH once for the whole run.
-  std::optional<SH9> environment;
-  if (!p.environment.empty()) environment = io::load_environment(p.environment);
   // Outputs and display images: settings checked before any frame is computed.
   pipeline::FrameOutput output(
       {o.output, o.no_display, o.display_out, o.display_layer,
@@ -141,7 +136,7 @@ void run(const RunOptions& o) {
     std::cerr << clear << line << (tty ? "" : "\n") << std::flush;
   };
   try {
-    job.run(hooks, overlap, environment ? &*environment : nullptr);
+    job.run(hooks, overlap);
     output.commit();
   } catch (...) {
     if (tty && !o.quiet) std::cerr << "\n";

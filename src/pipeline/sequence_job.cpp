@@ -10,6 +10,7 @@
 
 #include "hbil/error.h"
 #include "hbil/scene_scale.h"
+#include "io/environment.h"
 
 namespace hbil::pipeline {
 
@@ -118,6 +119,8 @@ SequenceJob::SequenceJob(SequencePlan plan, const Params& requested) : plan_(std
     scene_ = measure_scene(g, cam, p_);
     p_ = resolve_scene_params(p_, scene_, &why_scene_);
   }
+  // Far field: the environment projected to SH once for the whole run.
+  if (!p_.environment.empty()) environment_ = io::load_environment(p_.environment);
 }
 
 bool SequenceJob::overlaps(Overlap o) const {
@@ -126,7 +129,8 @@ bool SequenceJob::overlaps(Overlap o) const {
           size_t(first_.spec.width) * size_t(first_.spec.height) <= (size_t(1) << 22));
 }
 
-void SequenceJob::run(const Hooks& hooks, Overlap overlap_mode, const SH9* environment) const {
+void SequenceJob::run(const Hooks& hooks, Overlap overlap_mode, const SH9* given) const {
+  const SH9* environment = given ? given : environment_ ? &*environment_ : nullptr;
   // A frame as read: header, fields and camera, with the time each took.
   struct Loaded {
     io::InputFrame in;

@@ -11,6 +11,7 @@
 
 #include <chrono>
 #include <functional>
+#include <optional>
 #include <set>
 #include <string>
 #include <vector>
@@ -73,6 +74,7 @@ class SequenceJob {
   // computes the same layers, and a later frame that lacks a pass is an error. Opens the
   // header of every other planned frame too, so that a missing or unreadable input is
   // Error(Exit::input) before any frame is computed.
+  // Loads the environment (far field) the parameters name, once.
   SequenceJob(SequencePlan plan, const Params& requested);
 
   const SequencePlan& plan() const { return plan_; }
@@ -104,6 +106,7 @@ class SequenceJob {
   // With a temporal chain, a gap in the frame numbers drops the history: a frame whose
   // predecessor at the sequence's step (the smallest difference between its frame numbers)
   // is missing is computed as after a cut, with the reason "frame N missing".
+  // `environment`: the far field's SH, instead of the one the parameters name.
   void run(const Hooks& hooks, Overlap overlap = Overlap::automatic,
            const SH9* environment = nullptr) const;
 
@@ -113,6 +116,7 @@ class SequenceJob {
   Params p_;
   std::string why_dropped_, why_scene_;
   SceneScale scene_;
+  std::optional<SH9> environment_;
 };
 
 }  // namespace hbil::pipeline
