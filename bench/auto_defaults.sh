@@ -15,6 +15,11 @@
 # 1-bounce DiffCol*DiffInd, AO RMSE against the AO pass, composite PSNR against Combined, for
 # auto, for the former defaults (4, 0.4) and for the best configuration of the grid on each
 # measure; and auto's ratio to the best (1.0 = as good as the best).
+# With TUNE=1, a second table: auto against `hbil tune` (--tolerance 0, objective indirect,
+# then ao), searching the keys auto sets (--keys gather_radius,thickness,gather_thickness),
+# and searching every key within auto's own time per frame (--budget: the default preset's
+# seconds per frame, 3 timed runs); auto's ratio to each tuned value. GRID=0 skips the first
+# table.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 hbil=${HBIL:-build/hbil}
@@ -22,9 +27,12 @@ tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 echo "- machine: $(nproc) cores; load at start: $(uptime | sed 's/.*load average: //')"
 echo
-echo "| scene | median depth | gather_radius / thickness / gather_thickness (auto) | indirect rel. RMSE: auto / 4 m, 0.4 / best (auto ÷ best) | AO RMSE: auto / 4 m, 0.4 / best (auto ÷ best) | composite PSNR: auto / 4 m, 0.4 |"
-echo "|---|---|---|---|---|---|"
+if [ "${GRID:-1}" != 0 ]; then
+  echo "| scene | median depth | gather_radius / thickness / gather_thickness (auto) | indirect rel. RMSE: auto / 4 m, 0.4 / best (auto ÷ best) | AO RMSE: auto / 4 m, 0.4 / best (auto ÷ best) | composite PSNR: auto / 4 m, 0.4 |"
+  echo "|---|---|---|---|---|---|"
+fi
 for dir in "$@"; do
+  [ "${GRID:-1}" != 0 ] || break
   name=$(basename "$dir")
   s="$dir/frame_####.exr"
   auto=$("$hbil" info "$dir/frame_0001.exr" --set 'passes.backdepth=""' | sed -n 's/^auto: //p')
@@ -50,5 +58,39 @@ print("| %s | %s m | %s | %.3f / %.3f / %.3f (%.2f) | %.4f / %.4f / %.4f (%.2f) 
     sys.argv[2], m.group(1) if m else "?", " / ".join(v for _, v in vals),
     ind(auto), ind(old), ind(bi), ind(auto) / ind(bi),
     ao(auto), ao(old), ao(ba), ao(auto) / ao(ba), comp(auto), comp(old)))
+PY
+done
+[ -n "${TUNE:-}" ] || exit 0
+echo
+echo "| scene | budget s/frame | indirect rel. RMSE: auto / tuned auto keys / tuned all keys in budget (auto ÷ each) | AO RMSE: auto / tuned auto keys / tuned all keys in budget (auto ÷ each) | methods chosen (indirect, ao; all keys) |"
+echo "|---|---|---|---|---|"
+for dir in "$@"; do
+  name=$(basename "$dir")
+  s="$dir/frame_####.exr"
+  refs=(--ref "ao=$s:AO" --ref "indirect=$dir/bounce1/frame_####.exr:DiffCol*DiffInd")
+  # auto's own time per frame, the budget: the default preset alone, 3 timed runs
+  "$hbil" bench "$s" -o "$tmp/$name-auto" -q --runs 3 --set 'passes.backdepth=""' "${refs[@]}" \
+    > /dev/null
+  budget=$(python3 -c 'import json,sys
+print("%.4f" % json.load(open(sys.argv[1]))["configurations"][0]["seconds_per_frame"])' \
+    "$tmp/$name-auto/bench.json")
+  for layer in indirect ao; do
+    "$hbil" tune "$s" -q --set 'passes.backdepth=""' "${refs[@]}" --layer $layer --tolerance 0 \
+      --keys gather_radius,thickness,gather_thickness -o "$tmp/$name-$layer-keys.json" > /dev/null
+    "$hbil" tune "$s" -q --set 'passes.backdepth=""' "${refs[@]}" --layer $layer \
+      --budget "$budget" -o "$tmp/$name-$layer-budget.json" > /dev/null
+  done
+  python3 - "$tmp" "$name" "$budget" <<'PY'
+import json, sys
+t, name, budget = sys.argv[1], sys.argv[2], sys.argv[3]
+auto = json.load(open("%s/%s-auto/bench.json" % (t, name)))["configurations"][0]
+tuned = lambda layer, kind: json.load(open("%s/%s-%s-%s.json" % (t, name, layer, kind)))
+ind = lambda kind: tuned("indirect", kind)["tuned"]["errors"]["indirect"]["relative_rmse"]
+ao = lambda kind: tuned("ao", kind)["tuned"]["errors"]["ao"]["rmse"]
+ai, aa = auto["layers"]["indirect"]["relative_rmse"], auto["layers"]["ao"]["rmse"]
+print("| %s | %s | %.3f / %.3f / %.3f (%.2f, %.2f) | %.4f / %.4f / %.4f (%.2f, %.2f) | %s, %s |" % (
+    name, budget, ai, ind("keys"), ind("budget"), ai / ind("keys"), ai / ind("budget"),
+    aa, ao("keys"), ao("budget"), aa / ao("keys"), aa / ao("budget"),
+    tuned("indirect", "budget")["method"], tuned("ao", "budget")["method"]))
 PY
 done

@@ -9,7 +9,7 @@
 //   grep -v '^HBIL_Sky' samples/povray/study.pov > /tmp/study_nosky.pov   # the sky's share
 //   samples/povray/render_gbuffer.sh --frames 1-8 --size 320x180 --reference --bounces 1 \
 //     /tmp/study_nosky.pov /tmp/pov_nosky
-//   ONLY_POVRAY=1 HELDOUT_POV=/tmp/pov_study HELDOUT_POV_NOSKY=/tmp/pov_nosky bench/measure.sh
+//   ONLY_POVRAY=1 HELDOUT_POV=/tmp/pov_study HELDOUT_POV_NOSKY=/tmp/pov_nosky bench/tables.sh
 // (render_gbuffer.sh finds hbil.inc on its own library path.)
 #version 3.7;
 #include "hbil.inc"
