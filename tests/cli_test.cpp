@@ -668,6 +668,17 @@ TEST_F(Cli, UnwritableOutputFolderIsExit8) {
 
 // --- info, compare, preset ----------------------------------------------------------
 
+// Every --help ends with the exit codes and where the manual is.
+TEST_F(Cli, HelpNamesTheManualAndTheExitCodes) {
+  for (const char* cmd : {"--help", "run --help", "bench --help", "info --help"}) {
+    const RunResult r = hbil(cmd);
+    EXPECT_EQ(r.code, 0) << cmd << r.err;
+    EXPECT_TRUE(contains(r.out, "Exit codes: 0 done, 1 internal error, 2 usage")) << cmd << r.out;
+    EXPECT_TRUE(contains(r.out, "8 output cannot be written")) << cmd << r.out;
+    EXPECT_TRUE(contains(r.out, "man hbil")) << cmd << r.out;
+  }
+}
+
 TEST_F(Cli, InfoListsPassesCameraAndOutputs) {
   const RunResult r = hbil("info " + q(sample(1)));
   ASSERT_EQ(r.code, 0) << r.err;
@@ -678,6 +689,11 @@ TEST_F(Cli, InfoListsPassesCameraAndOutputs) {
   EXPECT_TRUE(contains(r.out, "camera: sidecar frame_0001.camera.json")) << r.out;
   EXPECT_TRUE(contains(r.out, "ao: yes")) << r.out;
   EXPECT_TRUE(contains(r.out, "bentcone: yes")) << r.out;
+  // No environment set: no far field, whatever the passes.
+  EXPECT_TRUE(contains(r.out, "farfield: no: needs an environment")) << r.out;
+  const RunResult env = hbil("info " + q(sample(1)) + " --set 'environment=\"rgb:1,1,1\"'");
+  ASSERT_EQ(env.code, 0) << env.err;
+  EXPECT_TRUE(contains(env.out, "farfield: yes")) << env.out;
 
   // Without Normal (and without a sidecar): the outputs cannot be computed and info says
   // why, exit 0 all the same; the camera is solved from Position.

@@ -103,6 +103,10 @@ void info(const std::string& path, const ParamOptions& po) {
     Params one = p;
     one.outputs = {o};
     std::cout << "  " << o << ": ";
+    if (o == "farfield" && p.environment.empty()) {
+      std::cout << "no: needs an environment (--set environment=FILE or rgb:R,G,B)\n";
+      continue;
+    }
     try {
       std::cout << "yes, from " + join(io::fields_needed(f, one)) + "\n";  // throws before printing
     } catch (const Error& e) {

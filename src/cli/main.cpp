@@ -20,6 +20,14 @@ int main(int argc, char** argv) {
   hbil::cli::add_compare(app);
   hbil::cli::add_preset(app);
   hbil::cli::add_import_povray(app);
+  // Every --help names the manual and the exit codes.
+  const std::string footer =
+      "\nExit codes: 0 done, 1 internal error, 2 usage, 3 input missing or unreadable, 4 "
+      "pass missing, 5 bad data, 6 no usable camera, 7 preset, 8 output cannot be written.\n"
+      "Manual (every option, layer and exit code): man hbil, or man -l man/hbil.1 in the "
+      "source tree.";
+  app.footer(footer);
+  for (CLI::App* sub : app.get_subcommands({})) sub->footer(footer);
   // OIIO's own thread pool is not needed: hbil parallelises with TBB.
   // OIIO::attribute("threads", 1);
   try {
