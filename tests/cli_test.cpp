@@ -167,6 +167,9 @@ TEST_F(Cli, RunWritesLayersAndMetadata) {
     EXPECT_EQ(preset["thickness"], 0.4);  // 0.15 x 2.99 m, at most 0.4 x radius
     EXPECT_NEAR(preset["gather_thickness"].get<double>(), 0.3 * 2.986, 0.002);
     EXPECT_EQ(px.spec.get_string_attribute("hbil:version"), HBIL_VERSION);
+    // The writer is hbil; Blender's multilayer marker (in the input) is not carried over.
+    EXPECT_EQ(px.spec.get_string_attribute("Software"), "hbil " HBIL_VERSION);
+    EXPECT_EQ(px.spec.find_attribute("BlenderMultiChannel"), nullptr);
     const json cam = json::parse(px.spec.get_string_attribute("hbil:camera"));
     EXPECT_EQ(cam["source"], "sidecar frame_000" + std::to_string(frame) + ".camera.json");
     EXPECT_EQ(cam["resolution"], json::array({kSampleW, kSampleH}));

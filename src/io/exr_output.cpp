@@ -134,15 +134,19 @@ std::string write_temporary(const std::string& final_path, const AoFrame& f,
   if (!any_half) spec.channelformats.clear();
   spec.alpha_channel = -1;
   spec.z_channel = -1;
-  // The input's metadata first (stamp, cycles.*, ...), minus what describes its storage.
+  // The input's metadata first (stamp, cycles.*, ...), minus what describes its storage and
+  // its writer: BlenderMultiChannel tells Blender the channels are its own render layers,
+  // which hbil's are not; Software is hbil.
   for (const OIIO::ParamValue& a : input_header.extra_attribs) {
     const std::string name = a.name().string();
     if (name.rfind("oiio:", 0) == 0 || name.rfind("openexr:", 0) == 0 || name == "compression" ||
         name == "channelformats" || name == "worldtocamera" || name == "worldtoNDC" ||
-        name == "worldToCamera" || name == "worldToNDC" || name.rfind("hbil:", 0) == 0)
+        name == "worldToCamera" || name == "worldToNDC" || name.rfind("hbil:", 0) == 0 ||
+        name == "BlenderMultiChannel" || name == "Software")
       continue;
     spec.attribute(name, a.type(), a.data());
   }
+  spec.attribute("Software", "hbil " HBIL_VERSION);
   spec.attribute("compression", p.compression);
   spec.attribute("hbil:version", HBIL_VERSION);
   spec.attribute("hbil:preset", to_json(p).dump());
