@@ -13,6 +13,7 @@
 #include "hbil/ao_frame.h"
 #include "hbil/farfield.h"
 #include "hbil/interleave.h"
+#include "test_util.h"
 
 namespace hbil {
 namespace {
@@ -223,19 +224,14 @@ TEST(Determinism, IdenticalBytesForAnyThreadCount) {
       AoFrame one, many;
       tbb::task_arena(1).execute([&] { one = compute_ao_frame(g, cam, p, &sky); });
       tbb::task_arena(4).execute([&] { many = compute_ao_frame(g, cam, p, &sky); });
-      auto same = [](const auto& a, const auto& b, const char* layer) {
-        ASSERT_EQ(a.size(), b.size()) << layer;
-        ASSERT_FALSE(a.empty()) << layer << " was not computed";
-        EXPECT_EQ(0, std::memcmp(a.data(), b.data(), a.size() * sizeof(a[0]))) << layer;
-      };
-      same(one.ao, many.ao, "ao");
-      same(one.ao_rgb, many.ao_rgb, "ao_rgb");
-      same(one.bent, many.bent, "bent");
-      same(one.cone_cos, many.cone_cos, "cone_cos");
-      same(one.irradiance, many.irradiance, "irradiance");
-      same(one.indirect, many.indirect, "indirect");
-      same(one.composite, many.composite, "composite");
-      same(one.farfield, many.farfield, "farfield");
+      test::expect_same_bytes(one.ao, many.ao, "ao");
+      test::expect_same_bytes(one.ao_rgb, many.ao_rgb, "ao_rgb");
+      test::expect_same_bytes(one.bent, many.bent, "bent");
+      test::expect_same_bytes(one.cone_cos, many.cone_cos, "cone_cos");
+      test::expect_same_bytes(one.irradiance, many.irradiance, "irradiance");
+      test::expect_same_bytes(one.indirect, many.indirect, "indirect");
+      test::expect_same_bytes(one.composite, many.composite, "composite");
+      test::expect_same_bytes(one.farfield, many.farfield, "farfield");
       // The irradiance is not trivially zero: the lit faces light the others.
       double sum = 0;
       for (const Vec3& e : one.irradiance) sum += e.x;

@@ -13,6 +13,7 @@
 #include "analytic_scenes.h"
 #include "hbil/ao_frame.h"
 #include "hbil/reproject.h"
+#include "test_util.h"
 
 namespace hbil {
 namespace {
@@ -162,16 +163,11 @@ TEST(Temporal, AutoOutputsAreResolvedOnTheFirstFrame) {
     const AoFrame f = chain.process(s.g, s.cam, frame, false);
     const AoFrame e = explicit_chain.process(s.g, s.cam, frame, false);
     // "auto" is exactly the five layers, computed as when they are listed.
-    auto same = [](const auto& x, const auto& y, const char* layer) {
-      ASSERT_EQ(x.size(), y.size()) << layer;
-      ASSERT_FALSE(x.empty()) << layer << " was not computed";
-      EXPECT_EQ(0, std::memcmp(x.data(), y.data(), x.size() * sizeof(x[0]))) << layer;
-    };
-    same(f.ao, e.ao, "ao");
-    same(f.bent, e.bent, "bent");
-    same(f.irradiance, e.irradiance, "irradiance");
-    same(f.indirect, e.indirect, "indirect");
-    same(f.composite, e.composite, "composite");
+    test::expect_same_bytes(f.ao, e.ao, "ao");
+    test::expect_same_bytes(f.bent, e.bent, "bent");
+    test::expect_same_bytes(f.irradiance, e.irradiance, "irradiance");
+    test::expect_same_bytes(f.indirect, e.indirect, "indirect");
+    test::expect_same_bytes(f.composite, e.composite, "composite");
     // The composite is DiffCol × (DiffDir + irradiance) (no Emit), and the unlit floor
     // receives light from the wall.
     double floor_e = 0;

@@ -60,6 +60,14 @@ class TempDir {
 };
 
 // The name of the running test, usable in a file name: "Suite_Name".
+// Two computed layers hold the same bytes (and were computed: not empty).
+template <class V>
+void expect_same_bytes(const V& a, const V& b, const char* layer) {
+  ASSERT_EQ(a.size(), b.size()) << layer;
+  ASSERT_FALSE(a.empty()) << layer << " was not computed";
+  EXPECT_EQ(0, std::memcmp(a.data(), b.data(), a.size() * sizeof(a[0]))) << layer;
+}
+
 inline std::string test_name() {
   const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
   std::string s = std::string(info->test_suite_name()) + "_" + info->name();
