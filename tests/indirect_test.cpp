@@ -90,6 +90,53 @@ TEST(NearFieldIrradiance, BitmaskUniformRadianceMatchesClosedForm) {
   check_uniform_radiance("bitmask");
 }
 
+// unseen_radiance U: the directions in which face A's points find no surface (the sky of
+// the groove) send U, those towards face B its radiance L: E/π = L (1 − AO) + U AO. "auto":
+// U = kAutoUnseen x the frame's mean DiffCol x DiffDir over its geometry.
+void check_unseen_radiance(bool automatic) {
+  const Vec3 L{0.5f, 1.f, 2.f};
+  const Groove s = lit_groove(90, L);
+  Params p = gather_params("bitmask");
+  Vec3 U{0.25f, 0.25f, 0.25f};
+  if (automatic) {
+    p.unseen_radiance_auto = true;
+    Vec3d sum;
+    size_t n = 0;
+    for (size_t i = 0; i < s.g.pixels(); ++i)
+      if (s.g.depth[i] < 1e9f) sum += Vec3d(s.g.diffdir[i]), ++n;  // albedo 1
+    U = Vec3(sum / double(n)) * kAutoUnseen;
+    ASSERT_GT(U.x, 0.05f);
+    ASSERT_LT(U.x, 0.45f);
+  } else {
+    p.unseen_radiance = 0.25;
+  }
+  const AoFrame f = compute_ao_frame(s.g, s.cam, p);
+  int checked = 0;
+  for (int y = 0; y < s.g.height; ++y)
+    for (int x = 0; x < s.g.width; ++x) {
+      const size_t i = size_t(y) * s.g.width + x;
+      if (s.g.normal[i].z < 0.99f) continue;
+      const Vec3d hit = s.cam.view_to_world(s.cam.unproject(x + 0.5, y + 0.5, s.g.depth[i]));
+      if (hit.y < 0.05 || hit.y > 0.6 || std::fabs(hit.x) > 0.3) continue;
+      const double psi =
+          std::atan2(s.length_b * std::sin(s.gamma), hit.y - s.length_b * std::cos(s.gamma));
+      const double occluded = (1 - std::cos(psi)) / 2;
+      ++checked;
+      // 32 sectors quantise the boundary, as in check_uniform_radiance.
+      EXPECT_NEAR(f.irradiance[i].x, L.x * occluded + U.x * (1 - occluded), 0.04 * L.x);
+      EXPECT_NEAR(f.irradiance[i].z, L.z * occluded + U.z * (1 - occluded), 0.04 * L.z);
+      EXPECT_NEAR(f.ao[i], 1 - occluded, 0.04);  // ao is not lit by it
+    }
+  EXPECT_GT(checked, 50);
+}
+
+TEST(UnseenRadiance, OpenDirectionsSendTheGivenRadiance) {
+  check_unseen_radiance(false);
+}
+TEST(UnseenRadiance, AutoIsAFractionOfTheFramesDirectOutgoingRadiance) {
+  check_unseen_radiance(true);
+}
+
 TEST(NearFieldIrradiance, BackFacingNeighbourOccludesButSendsNoLight) {
   Groove s = lit_groove(90, {1, 1, 1});
   const Params p = gather_params("horizon");

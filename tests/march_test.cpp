@@ -108,6 +108,18 @@ TEST(MarchSimd, MatchesScalarWithMeasuredThicknessAndGather) {
   compare_kernels(v, c, &radiance, 2);
   c.gather_steps = 0;  // the gather within the AO radius only
   compare_kernels(v, c, &radiance, 2);
+  // Radiance in the directions the gather finds empty (unseen_radiance).
+  c = make_horizon_config(p, cam);
+  c.fill = Vec3{0.3f, 0.2f, 0.1f};
+  compare_kernels(v, c, &radiance, 2);
+  c.bitmask = true;
+  HorizonConfig none = c;
+  none.fill = Vec3{};
+  const HorizonImage lit = horizon_interleaved(v, c, 2, &radiance),
+                     unlit = horizon_interleaved(v, none, 2, &radiance);
+  double more = 0;
+  for (size_t i = 0; i < v.pixels(); ++i) more += lit.irradiance[i].z - unlit.irradiance[i].z;
+  EXPECT_GT(more / double(v.pixels()), 0.01) << "the fill must light the open directions";
 }
 
 // samples/room_poles frame 3 as the search sees it.
@@ -155,7 +167,10 @@ TEST(MarchSimd, EveryInstructionSetGivesTheSameBits) {
     std::cout << " " << hwy::TargetName(t);
     hwy::SetSupportedTargetsForTest(t);
     EXPECT_STREQ(march_simd_target(), hwy::TargetName(t));
-    compare_kernels(sample.v, make_horizon_config(p, sample.cam), &radiance, 2);
+    HorizonConfig c = make_horizon_config(p, sample.cam);
+    compare_kernels(sample.v, c, &radiance, 2);
+    c.fill = Vec3{0.05f, 0.1f, 0.15f};  // unseen_radiance
+    compare_kernels(sample.v, c, &radiance, 2);
   }
   std::cout << "\n";
   hwy::SetSupportedTargetsForTest(0);
@@ -188,6 +203,15 @@ TEST(GatherRecord, ReplayEqualsANewSearch) {
     const HorizonImage replayed = horizon_interleaved(v, c, 2, &second, true, &record);
     const HorizonImage marched = horizon_interleaved(v, c, 2, &second);
     expect_identical(replayed, marched);
+    // With radiance in the open directions, recorded with one value and replayed with another.
+    HorizonConfig lit = c;
+    lit.fill = Vec3{0.1f, 0.2f, 0.3f};
+    GatherRecord lit_record;
+    expect_identical(horizon_interleaved(v, lit, 2, &first, true, &lit_record),
+                     horizon_interleaved(v, lit, 2, &first));
+    lit.fill = Vec3{0.4f, 0.f, 0.05f};
+    expect_identical(horizon_interleaved(v, lit, 2, &second, true, &lit_record),
+                     horizon_interleaved(v, lit, 2, &second));
     double diff = 0;
     for (size_t i = 0; i < g.pixels(); ++i)
       diff += std::fabs(a.irradiance[i].x - marched.irradiance[i].x);

@@ -58,6 +58,28 @@ AoFrame compute_ao_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& c
   return assemble_frame(v, g, cam, p, search_frame(v, g, cam, p, FrameInputs{}), environment);
 }
 
+Vec3 mean_geometry_radiance(const ViewGBuffer& v, const std::vector<Vec3>& L) {
+  // In rows (summed in double, then row sums in order): the same for any thread count.
+  std::vector<Vec3d> rows(size_t(v.height));
+  std::vector<size_t> counts(size_t(v.height), 0);
+  tbb::parallel_for(0, v.height, [&](int y) {
+    Vec3d sum;
+    size_t n = 0;
+    for (int x = 0; x < v.width; ++x) {
+      const size_t i = size_t(y) * v.width + x;
+      if (v.is_background(i)) continue;
+      sum += Vec3d(L[i]);
+      ++n;
+    }
+    rows[size_t(y)] = sum;
+    counts[size_t(y)] = n;
+  });
+  Vec3d sum;
+  size_t n = 0;
+  for (int y = 0; y < v.height; ++y) sum += rows[size_t(y)], n += counts[size_t(y)];
+  return n ? Vec3(sum / double(n)) : Vec3{};
+}
+
 HorizonImage search_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& cam,
                           const Params& p, FrameInputs in) {
   HorizonConfig c = make_horizon_config(p, cam);
@@ -93,6 +115,11 @@ HorizonImage search_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& 
   // Each buffer is released at its last use: the feedback and the previous bounce once the
   // source radiance is made, the source radiance once the march has what it reads.
   HorizonImage h;
+  // unseen_radiance "auto": a fraction of the frame's mean direct outgoing radiance
+  // (params.h), the same for every bounce.
+  const Vec3 unseen_auto = gather && p.unseen_radiance_auto
+                               ? mean_geometry_radiance(v, source_radiance(g, {})) * kAutoUnseen
+                               : Vec3{};
   const bool fresnel = !g.f0.empty() || !g.metallic.empty();
   for (int bounce = 0; bounce < (gather ? p.bounces : 1); ++bounce) {
     std::vector<Vec3> L;
@@ -100,6 +127,8 @@ HorizonImage search_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& 
       L = source_radiance(g, bounce == 0 ? in.feedback : h.irradiance);
       std::vector<Vec3>().swap(in.feedback);
       h = HorizonImage{};
+      const float u = float(p.unseen_radiance);
+      c.fill = p.unseen_radiance_auto ? unseen_auto : Vec3{u, u, u};
     }
     h = search(gather ? &L : nullptr);
     if (fresnel)

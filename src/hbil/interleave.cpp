@@ -170,7 +170,7 @@ HorizonImage horizon_interleaved(const ViewGBuffer& g, const HorizonConfig& c, i
         const size_t dst = size_t(4 * j + s.oy) * g.width + (4 * i + s.ox);
         if (g.is_background(dst)) continue;
         out.irradiance[dst] =
-            replay_gather(log, s.view.radiance, slices, entry, count) / float(slices);
+            replay_gather(log, s.view.radiance, c.fill, slices, entry, count) / float(slices);
       }
       return;
     }

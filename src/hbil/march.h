@@ -23,8 +23,10 @@ namespace hbil {
 // rejection-filter weight fw (§3.4) and sector weight w (eq. 18). Summing
 // Σ_slices Σ_entries (L[src] · fw) · w in this order gives the march's irradiance to the bit.
 struct GatherEntry {
-  std::uint32_t src;  // the sample's index in the view (SampleView::index)
+  std::uint32_t src;  // the sample's index in the view (SampleView::index), or kFillSource
   float fw, w;
+  // The entry of a slice's open sectors (w: their weight), lit by HorizonConfig::fill.
+  static constexpr std::uint32_t kFillSource = 0xFFFFFFFFu;
 };
 struct GatherLog {
   std::vector<GatherEntry> entries;   // pixel by pixel, slice by slice
@@ -72,8 +74,9 @@ inline void march_row(const SampleView& view, int i0, int j, int count, const fl
 const char* march_simd_target();
 
 // The irradiance sum of one logged pixel with source radiance `radiance` (indexed like the
-// view the log was made on); `entry` and `count` advance past it.
-Vec3 replay_gather(const GatherLog& log, const Vec3* radiance, int n_slices, size_t& entry,
-                   size_t& count);
+// view the log was made on) and `fill` in its open directions (HorizonConfig::fill); `entry`
+// and `count` advance past it.
+Vec3 replay_gather(const GatherLog& log, const Vec3* radiance, const Vec3& fill, int n_slices,
+                   size_t& entry, size_t& count);
 
 }  // namespace hbil

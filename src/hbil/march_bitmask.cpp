@@ -143,6 +143,14 @@ PixelSums march_bitmask_pixel(const SampleView& view, int i, int j, const Vec3& 
         }
       }
     }
+    // The directions the gather found empty see `fill` (logged as one entry, last).
+    if (m.gather && (c.fill.x != 0.f || c.fill.y != 0.f || c.fill.z != 0.f)) {
+      float w = 0.f;
+      for (int k = 0; k < kSectors; ++k)
+        if (!(occluded_g >> k & 1u)) w += bound[k + 1].ao - bound[k].ao;
+      irradiance += c.fill * w;
+      if (log) log->entries.push_back({GatherEntry::kFillSource, 1.f, w});
+    }
     for (int k = 0; k < kSectors; ++k) {
       if (occluded >> k & 1u) continue;
       acc.ao += bound[k + 1].ao - bound[k].ao;
@@ -155,14 +163,14 @@ PixelSums march_bitmask_pixel(const SampleView& view, int i, int j, const Vec3& 
   return acc;
 }
 
-Vec3 replay_gather(const GatherLog& log, const Vec3* radiance, int n_slices, size_t& entry,
-                   size_t& count) {
+Vec3 replay_gather(const GatherLog& log, const Vec3* radiance, const Vec3& fill, int n_slices,
+                   size_t& entry, size_t& count) {
   Vec3 acc;
   for (int s = 0; s < n_slices; ++s) {
     Vec3 irradiance;
     for (int k = log.counts[count++]; k > 0; --k) {
       const GatherEntry& e = log.entries[entry++];
-      irradiance += radiance[e.src] * e.fw * e.w;
+      irradiance += e.src == GatherEntry::kFillSource ? fill * e.w : radiance[e.src] * e.fw * e.w;
     }
     acc += irradiance;
   }

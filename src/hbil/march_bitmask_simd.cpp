@@ -57,6 +57,8 @@ void MarchBitmaskRow(const SampleView& view, int i0, int j, int count, const flo
   const VF grazing2 = hn::Set(d, kGrazing2);
   const VI lane = hn::Iota(di, 0);
   const MF none = hn::FirstN(d, 0);
+  const bool has_fill = gather && (c.fill.x != 0.f || c.fill.y != 0.f || c.fill.z != 0.f);
+  const V3 fill{hn::Set(d, c.fill.x), hn::Set(d, c.fill.y), hn::Set(d, c.fill.z)};
 
   // Per-lane scratch: the boundary antiderivatives (33 per lane) and the slice angles.
   HWY_ALIGN float b_ao[(kSectors + 1) * kMaxLanes];
@@ -234,6 +236,25 @@ void MarchBitmaskRow(const SampleView& view, int i0, int j, int count, const flo
               if (fresh_lane[l] != 0.f)
                 lane_entries[l].push_back({std::uint32_t(k_lane[l]), fw_lane[l], w_lane[l]});
           }
+        }
+      }
+      // The directions the gather found empty see c.fill (march_bitmask.cpp).
+      if (has_fill) {
+        VF w = zero;
+        for (int k = 0; k < kSectors; ++k) {
+          const MF open_g =
+              hn::RebindMask(d, hn::Eq(hn::And(occluded_g, hn::Set(du, 1u << k)), hn::Zero(du)));
+          const VF dw = hn::Sub(hn::Load(d, b_ao + (k + 1) * N), hn::Load(d, b_ao + k * N));
+          w = hn::IfThenElse(open_g, hn::Add(w, dw), w);
+        }
+        irradiance = Add3(irradiance, Scale(fill, w));
+        if (log) {
+          HWY_ALIGN float w_lane[kMaxLanes], live_lane[kMaxLanes];
+          hn::Store(w, d, w_lane);
+          hn::Store(hn::IfThenElseZero(live, one), d, live_lane);
+          for (size_t l = 0; l < N; ++l)
+            if (live_lane[l] != 0.f)
+              lane_entries[l].push_back({GatherEntry::kFillSource, 1.f, w_lane[l]});
         }
       }
       // The unoccluded sectors, in order (march_bitmask.cpp).

@@ -81,6 +81,11 @@ const std::vector<ParamInfo>& params_table() {
        "\"auto\" (default): the width of the first frame at its median depth"},
       {"gather_steps", &Params::gather_steps, 0, 256, "per side",
        "samples per side of a slice between radius and gather_radius, seen only by the gather"},
+      {"unseen_radiance", &Params::unseen_radiance, 0, 1e6, "radiance",
+       "the radiance assumed in the directions where the gather finds no surface: none within "
+       "gather_radius, or the screen edge first (light from what the frame does not show); "
+       "\"auto\": the mean outgoing radiance of the frame's geometry (per channel, per "
+       "bounce); 0: none"},
       {"bounces", &Params::bounces, 1, 16, "count",
        "in-frame bounces of indirect light: bounce k gathers the outgoing radiance of bounce k-1"},
       {"ao_multibounce", &Params::ao_multibounce, 0, 1, "bool",
@@ -177,6 +182,7 @@ json to_json(const Params& p) {
   if (p.gather_radius_auto) j["gather_radius"] = "auto";
   if (p.thickness_auto) j["thickness"] = "auto";
   if (p.gather_thickness_auto) j["gather_thickness"] = "auto";
+  if (p.unseen_radiance_auto) j["unseen_radiance"] = "auto";
   j["method"] = p.method;
   j["reprojection"] = p.reprojection;
   j["environment"] = p.environment;
@@ -232,11 +238,12 @@ Params params_from_json(const json& j, const std::string& where, Params p) {
     auto row = std::find_if(params_table().begin(), params_table().end(),
                             [&](const ParamInfo& i) { return key == i.key; });
     // gather_radius and thickness: a number, or "auto" (derived from the shot).
-    const bool may_be_auto =
-        key == "gather_radius" || key == "thickness" || key == "gather_thickness";
-    bool& auto_flag = key == "gather_radius" ? p.gather_radius_auto
-                      : key == "thickness"   ? p.thickness_auto
-                                             : p.gather_thickness_auto;
+    const bool may_be_auto = key == "gather_radius" || key == "thickness" ||
+                             key == "gather_thickness" || key == "unseen_radiance";
+    bool& auto_flag = key == "gather_radius"     ? p.gather_radius_auto
+                      : key == "thickness"       ? p.thickness_auto
+                      : key == "unseen_radiance" ? p.unseen_radiance_auto
+                                                 : p.gather_thickness_auto;
     if (may_be_auto && v.is_string()) {
       if (v.get<std::string>() != "auto")
         fail(where, "key '" + key + "' must be a number or \"auto\", got " + v.dump());

@@ -49,7 +49,12 @@ struct Params {
   // gather_radius "auto" (the default): the frame's width at the median depth, resolved per
   // shot (scene_scale.h); until then the number above applies.
   bool gather_radius_auto = true;
-  int gather_steps = 16;        // gather-only samples per side beyond radius
+  int gather_steps = 16;  // gather-only samples per side beyond radius
+  // Radiance of the directions where the gather finds no surface (nothing within
+  // gather_radius, or the screen edge first); "auto": the mean outgoing radiance of the
+  // frame's geometry, per bounce (ao_frame.h).
+  double unseen_radiance = 0.0;
+  bool unseen_radiance_auto = false;
   std::string environment;      // far field: "" (off), equirect EXR path, or "rgb:r,g,b"
   bool ao_multibounce = false;  // ao as RGB with the multi-bounce fit (improved-AO eq. 12)
 
