@@ -8,6 +8,7 @@
 #   REUSE=1 KEEP=/tmp/ladder ...                reuse rungs already complete in KEEP (their
 #                                               times are read back from the EXR headers)
 #   LADDER="1 2 4 8 16 32 64" RUNS=3 BLENDER=blender   (the defaults)
+#   PRESET=presets/interior.json ...            hbil's preset (default: presets/default.json)
 #
 # For every scene S (samples/blender/S.py; committed reference: samples/S/, 512 spp, 8 diffuse
 # bounces, seed 1, frames 1-8):
@@ -38,6 +39,7 @@ hbil=${1:-build/hbil}
 scenes=${SCENES:-room_poles courtyard}
 ladder=${LADDER:-1 2 4 8 16 32 64}
 runs=${RUNS:-3}
+preset=${PRESET:-presets/default.json}
 blender=${BLENDER:-blender}
 frames=1-8
 seed=7
@@ -75,7 +77,7 @@ rung() {
 
 echo "# Equal-error ladder: Cycles vs hbil"
 echo
-echo "- date: $(date -u +%Y-%m-%dT%H:%MZ), $(nproc) cores, $("$blender" --version 2> /dev/null | head -n 1), hbil: $hbil"
+echo "- date: $(date -u +%Y-%m-%dT%H:%MZ), $(nproc) cores, $("$blender" --version 2> /dev/null | head -n 1), hbil: $hbil, preset $preset"
 echo "- load at start: $(uptime)"
 
 read -r -a rungs <<< "$ladder"
@@ -92,7 +94,7 @@ for s in $scenes; do
   done
   in="samples/$s/frame_####.exr"
   log "$s: hbil bench, $runs runs"
-  "$hbil" bench "$in" -o "$work/$s/bench" -q --runs "$runs" --preset presets/default.json \
+  "$hbil" bench "$in" -o "$work/$s/bench" -q --runs "$runs" --preset "$preset" \
     --ref "composite=$in:Combined" "${full[@]}" > /dev/null
   "$hbil" bench "$in" -o "$work/$s/bench_direct" -q --preset presets/default.json \
     --ref "composite=$in:Combined" "${direct[@]}" > /dev/null

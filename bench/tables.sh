@@ -10,6 +10,9 @@
 #   HELDOUT_MOVE=dir HELDOUT_CUT=dir bench/tables.sh   also the temporal chain on the camera
 #       moves of samples/blender/study_shots.py (--shot move, frames 1-16; --shot cut, 1-12)
 #   ONLY_POVRAY=1 bench/tables.sh              only the POV-Ray tables
+#   ONLY_UNSEEN=1 bench/tables.sh              only the unseen_radiance table (default against
+#       presets/interior.json); UNSEEN="dir..." adds scenes rendered with samples/blender/*.py
+#       (frames with Combined and DiffCol*DiffInd of the 8-bounce render)
 #   HELDOUT_POV=/tmp/pov_study bench/tables.sh   also the held-out POV-Ray scene
 #       (samples/povray/study.pov, rendered as its header says); HELDOUT_POV_NOSKY=dir adds
 #       the same scene rendered without its HBIL_Sky line (--reference --bounces 1)
@@ -109,8 +112,34 @@ povray_table() {
       --ref-layer 'DiffCol*DiffInd' --json | python3 -c 'import json,sys
 o=json.load(sys.stdin)["overall"]; print("%.4f / %+.4f / %.2f" % (o["rmse"], o["mean_error"], o["psnr"]))')"
 }
+# unseen_table: the default preset against presets/interior.json (unseen_radiance "auto"),
+# temporal chain, on the two samples, the POV-Ray room and every folder of $UNSEEN.
+unseen_table() {
+  echo
+  echo "unseen_radiance: the defaults (0) against presets/interior.json (\"auto\"), temporal"
+  echo "chain, indirect against the full-GI render's DiffCol*DiffInd, composite against its"
+  echo "Combined $(load):"
+  echo
+  echo "| scene | preset | indirect RMSE / mean / PSNR | composite RMSE / mean / PSNR | s/frame |"
+  echo "|---|---|---|---|---|"
+  "$hbil" import-povray -q samples/povray_room/passes -o "$out/povu/frame_####.exr"
+  local dir in name
+  for dir in samples/room_poles samples/courtyard "$out/povu" ${UNSEEN:-}; do
+    in="$dir/frame_####.exr"
+    name=$(basename "$dir")
+    [ "$dir" = "$out/povu" ] && name="povray_room"
+    b "unseen-$name" "$in" --ref "indirect=$in:DiffCol*DiffInd" --ref "composite=$in:Combined" \
+      --preset presets/default.json --preset presets/interior.json
+    rows "unseen-$name" --prefix "$name" indirect:rmp composite:rmp s
+  done
+}
+
 if [ -n "${ONLY_POVRAY:-}" ]; then
   povray_table
+  exit 0
+fi
+if [ -n "${ONLY_UNSEEN:-}" ]; then
+  unseen_table
   exit 0
 fi
 
@@ -177,6 +206,7 @@ if [ -n "${HELDOUT:-}" ]; then
 fi
 
 povray_table
+unseen_table
 
 # temporal NAME SCENE_DIR: single frames against the chain; AO, indirect against the 1- and
 # the 8-bounce reference, composite; the revealed-pixel figures of --stability on indirect.

@@ -57,13 +57,12 @@ Params gather_params(const std::string& method) {
   return p;
 }
 
-// A point on face A sees face B over exactly the directions it does not see the sky, all
-// of radiance L: E/π = L (1 − AO), with 1 − AO = (1 − cos ψ)/2 (horizon_test.cpp).
-void check_uniform_radiance(const std::string& method) {
-  const Vec3 L{0.5f, 1.f, 2.f};
-  const Groove s = lit_groove(90, L);
-  const AoFrame f = compute_ao_frame(s.g, s.cam, gather_params(method));
-  int checked = 0;
+// fn(i, occluded, d) for the pixels i of face A's middle (0.05 < d < 0.6 from the crease),
+// with the fraction (1 − cos ψ)/2 of the cosine-weighted hemisphere that face B fills there;
+// returns how many.
+template <class Fn>
+int for_each_face_a_point(const Groove& s, Fn fn) {
+  int n = 0;
   for (int y = 0; y < s.g.height; ++y)
     for (int x = 0; x < s.g.width; ++x) {
       const size_t i = size_t(y) * s.g.width + x;
@@ -72,14 +71,25 @@ void check_uniform_radiance(const std::string& method) {
       if (hit.y < 0.05 || hit.y > 0.6 || std::fabs(hit.x) > 0.3) continue;
       const double psi =
           std::atan2(s.length_b * std::sin(s.gamma), hit.y - s.length_b * std::cos(s.gamma));
-      const double occluded = (1 - std::cos(psi)) / 2;
-      ++checked;
-      // Bitmask: 32 sectors quantise the boundary; measured below 0.03 of L.
-      const double tol = method == "bitmask" ? 0.04 : 0.02;
-      EXPECT_NEAR(f.irradiance[i].x / L.x, occluded, tol) << method << " d=" << hit.y;
-      EXPECT_NEAR(f.irradiance[i].z / L.z, occluded, tol) << method << " d=" << hit.y;
-      EXPECT_NEAR(f.indirect[i].y, f.irradiance[i].y, 1e-6);  // albedo 1
+      fn(i, (1 - std::cos(psi)) / 2, hit.y);
+      ++n;
     }
+  return n;
+}
+
+// A point on face A sees face B over exactly the directions it does not see the sky, all
+// of radiance L: E/π = L (1 − AO), with 1 − AO = (1 − cos ψ)/2 (horizon_test.cpp).
+void check_uniform_radiance(const std::string& method) {
+  const Vec3 L{0.5f, 1.f, 2.f};
+  const Groove s = lit_groove(90, L);
+  const AoFrame f = compute_ao_frame(s.g, s.cam, gather_params(method));
+  const int checked = for_each_face_a_point(s, [&](size_t i, double occluded, double d) {
+    // Bitmask: 32 sectors quantise the boundary; measured below 0.03 of L.
+    const double tol = method == "bitmask" ? 0.04 : 0.02;
+    EXPECT_NEAR(f.irradiance[i].x / L.x, occluded, tol) << method << " d=" << d;
+    EXPECT_NEAR(f.irradiance[i].z / L.z, occluded, tol) << method << " d=" << d;
+    EXPECT_NEAR(f.indirect[i].y, f.irradiance[i].y, 1e-6);  // albedo 1
+  });
   EXPECT_GT(checked, 50);
 }
 
@@ -111,22 +121,12 @@ void check_unseen_radiance(bool automatic) {
     p.unseen_radiance = 0.25;
   }
   const AoFrame f = compute_ao_frame(s.g, s.cam, p);
-  int checked = 0;
-  for (int y = 0; y < s.g.height; ++y)
-    for (int x = 0; x < s.g.width; ++x) {
-      const size_t i = size_t(y) * s.g.width + x;
-      if (s.g.normal[i].z < 0.99f) continue;
-      const Vec3d hit = s.cam.view_to_world(s.cam.unproject(x + 0.5, y + 0.5, s.g.depth[i]));
-      if (hit.y < 0.05 || hit.y > 0.6 || std::fabs(hit.x) > 0.3) continue;
-      const double psi =
-          std::atan2(s.length_b * std::sin(s.gamma), hit.y - s.length_b * std::cos(s.gamma));
-      const double occluded = (1 - std::cos(psi)) / 2;
-      ++checked;
-      // 32 sectors quantise the boundary, as in check_uniform_radiance.
-      EXPECT_NEAR(f.irradiance[i].x, L.x * occluded + U.x * (1 - occluded), 0.04 * L.x);
-      EXPECT_NEAR(f.irradiance[i].z, L.z * occluded + U.z * (1 - occluded), 0.04 * L.z);
-      EXPECT_NEAR(f.ao[i], 1 - occluded, 0.04);  // ao is not lit by it
-    }
+  const int checked = for_each_face_a_point(s, [&](size_t i, double occluded, double d) {
+    // 32 sectors quantise the boundary, as in check_uniform_radiance.
+    EXPECT_NEAR(f.irradiance[i].x, L.x * occluded + U.x * (1 - occluded), 0.04 * L.x) << d;
+    EXPECT_NEAR(f.irradiance[i].z, L.z * occluded + U.z * (1 - occluded), 0.04 * L.z) << d;
+    EXPECT_NEAR(f.ao[i], 1 - occluded, 0.04);  // ao is not lit by it
+  });
   EXPECT_GT(checked, 50);
 }
 
