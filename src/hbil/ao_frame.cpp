@@ -58,7 +58,7 @@ AoFrame compute_ao_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& c
   return assemble_frame(v, g, cam, p, search_frame(v, g, cam, p, FrameInputs{}), environment);
 }
 
-Vec3 mean_geometry_radiance(const ViewGBuffer& v, const std::vector<Vec3>& L) {
+Vec3 mean_direct_radiance(const ViewGBuffer& v, const GBuffer& g) {
   // In rows (summed in double, then row sums in order): the same for any thread count.
   std::vector<Vec3d> rows(size_t(v.height));
   std::vector<size_t> counts(size_t(v.height), 0);
@@ -68,7 +68,9 @@ Vec3 mean_geometry_radiance(const ViewGBuffer& v, const std::vector<Vec3>& L) {
     for (int x = 0; x < v.width; ++x) {
       const size_t i = size_t(y) * v.width + x;
       if (v.is_background(i)) continue;
-      sum += Vec3d(L[i]);
+      const Vec3 &a = g.diffcol[i], &e = g.diffdir[i];
+      sum += Vec3d(Vec3{a.x * e.x, a.y * e.y, a.z * e.z});  // as source_radiance
+      if (!g.emit.empty()) sum += Vec3d(g.emit[i]);
       ++n;
     }
     rows[size_t(y)] = sum;
@@ -117,9 +119,8 @@ HorizonImage search_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& 
   HorizonImage h;
   // unseen_radiance "auto": a fraction of the frame's mean direct outgoing radiance
   // (params.h), the same for every bounce.
-  const Vec3 unseen_auto = gather && p.unseen_radiance_auto
-                               ? mean_geometry_radiance(v, source_radiance(g, {})) * kAutoUnseen
-                               : Vec3{};
+  const Vec3 unseen_auto =
+      gather && p.unseen_radiance_auto ? mean_direct_radiance(v, g) * kAutoUnseen : Vec3{};
   const bool fresnel = !g.f0.empty() || !g.metallic.empty();
   for (int bounce = 0; bounce < (gather ? p.bounces : 1); ++bounce) {
     std::vector<Vec3> L;

@@ -61,9 +61,9 @@ Params resolve_frame_outputs(const GBuffer& g, const Params& requested);
 // of 0.3-1.5 for the composite against the 8-bounce render over its camera move; README,
 // "Light from what the frame does not show", for the scenes it was checked on).
 constexpr float kAutoUnseen = 0.8f;
-// The mean of L over v's geometry pixels, per channel (unseen_radiance "auto"); the same for
-// any thread count.
-Vec3 mean_geometry_radiance(const ViewGBuffer& v, const std::vector<Vec3>& L);
+// The mean over v's geometry pixels of g's DiffCol x DiffDir + Emit, per channel; the same
+// for any thread count.
+Vec3 mean_direct_radiance(const ViewGBuffer& v, const GBuffer& g);
 // Whether the outputs need the irradiance gather (irradiance, indirect, composite).
 bool gathers(const Params& p);
 HorizonImage search_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& cam,

@@ -61,8 +61,8 @@ struct HorizonConfig {
   float gather_radius = 1;        // world units, >= radius: how far the irradiance gather reaches
   int gather_steps = 0;           // samples per side between radius and gather_radius (gather only)
   // Radiance assumed in the directions where the gather finds nothing: no sample within
-  // gather_radius, or the screen edge first (the bitmask's sectors left open by the gather,
-  // the band above the horizon method's gather horizons). Zero: those directions send nothing.
+  // gather_radius, or the screen edge first (the bitmask's sectors the gather left open; the
+  // horizon march ignores it). Zero: those directions send nothing.
   Vec3 fill;
   // Temporal chain (HBIL §3.3 with accumulation): every slice angle turns by `rotation`
   // (radians) and every step jitter shifts by `jitter_shift` (mod 1), both from the frame.

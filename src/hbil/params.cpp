@@ -84,8 +84,9 @@ const std::vector<ParamInfo>& params_table() {
       {"unseen_radiance", &Params::unseen_radiance, 0, 1e6, "radiance",
        "the radiance assumed in the directions where the gather finds no surface: none within "
        "gather_radius, or the screen edge first (light from what the frame does not show); "
-       "\"auto\": the mean outgoing radiance of the frame's geometry (per channel, per "
-       "bounce); 0: none"},
+       "\"auto\": 0.8 x the frame's mean direct outgoing radiance, DiffCol x DiffDir + Emit "
+       "over its geometry (for enclosed scenes: presets/interior.json); 0: none; method "
+       "bitmask"},
       {"bounces", &Params::bounces, 1, 16, "count",
        "in-frame bounces of indirect light: bounce k gathers the outgoing radiance of bounce k-1"},
       {"ao_multibounce", &Params::ao_multibounce, 0, 1, "bool",
