@@ -112,14 +112,17 @@ TEST(MarchSimd, MatchesScalarWithMeasuredThicknessAndGather) {
   c = make_horizon_config(p, cam);
   c.fill = Vec3{0.3f, 0.2f, 0.1f};
   compare_kernels(v, c, &radiance, 2);
-  c.bitmask = true;
-  HorizonConfig none = c;
-  none.fill = Vec3{};
-  const HorizonImage lit = horizon_interleaved(v, c, 2, &radiance),
-                     unlit = horizon_interleaved(v, none, 2, &radiance);
-  double more = 0;
-  for (size_t i = 0; i < v.pixels(); ++i) more += lit.irradiance[i].z - unlit.irradiance[i].z;
-  EXPECT_GT(more / double(v.pixels()), 0.01) << "the fill must light the open directions";
+  for (bool bitmask : {true, false}) {
+    c.bitmask = bitmask;
+    HorizonConfig none = c;
+    none.fill = Vec3{};
+    const HorizonImage lit = horizon_interleaved(v, c, 2, &radiance),
+                       unlit = horizon_interleaved(v, none, 2, &radiance);
+    double more = 0;
+    for (size_t i = 0; i < v.pixels(); ++i) more += lit.irradiance[i].z - unlit.irradiance[i].z;
+    EXPECT_GT(more / double(v.pixels()), 0.01)
+        << (bitmask ? "bitmask" : "horizon") << ": the fill must light the open directions";
+  }
 }
 
 // samples/room_poles frame 3 as the search sees it.

@@ -61,9 +61,10 @@ struct HorizonConfig {
   float gather_radius = 1;        // world units, >= radius: how far the irradiance gather reaches
   int gather_steps = 0;           // samples per side between radius and gather_radius (gather only)
   // Radiance assumed in the directions where the gather finds nothing: no sample within
-  // gather_radius, or the screen edge first (the bitmask's sectors the gather left open; the
-  // horizon march ignores it). Zero: those directions send nothing.
+  // gather_radius, or the screen edge first (the bitmask's sectors the gather left open, the
+  // band between the horizon march's two gather horizons). Zero: those directions send nothing.
   Vec3 fill;
+  bool has_fill() const { return fill.x != 0.f || fill.y != 0.f || fill.z != 0.f; }
   // Temporal chain (HBIL §3.3 with accumulation): every slice angle turns by `rotation`
   // (radians) and every step jitter shifts by `jitter_shift` (mod 1), both from the frame.
   float rotation = 0, jitter_shift = 0;

@@ -144,7 +144,7 @@ PixelSums march_bitmask_pixel(const SampleView& view, int i, int j, const Vec3& 
       }
     }
     // The directions the gather found empty see `fill` (logged as one entry, last).
-    if (m.gather && (c.fill.x != 0.f || c.fill.y != 0.f || c.fill.z != 0.f)) {
+    if (m.gather && c.has_fill()) {
       float w = 0.f;
       for (int k = 0; k < kSectors; ++k)
         if (!(occluded_g >> k & 1u)) w += bound[k + 1].ao - bound[k].ao;

@@ -57,7 +57,7 @@ void MarchBitmaskRow(const SampleView& view, int i0, int j, int count, const flo
   const VF grazing2 = hn::Set(d, kGrazing2);
   const VI lane = hn::Iota(di, 0);
   const MF none = hn::FirstN(d, 0);
-  const bool has_fill = gather && (c.fill.x != 0.f || c.fill.y != 0.f || c.fill.z != 0.f);
+  const bool has_fill = gather && c.has_fill();
   const V3 fill{hn::Set(d, c.fill.x), hn::Set(d, c.fill.y), hn::Set(d, c.fill.z)};
 
   // Per-lane scratch: the boundary antiderivatives (33 per lane) and the slice angles.

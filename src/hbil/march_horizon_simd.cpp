@@ -33,6 +33,8 @@ void MarchHorizonRow(const SampleView& view, int i0, int j, int count, const flo
   const size_t N = hn::Lanes(d);
   const bool gather = view.radiance != nullptr;
   const VF zero = hn::Zero(d), one = hn::Set(d, 1.f);
+  const bool has_fill = gather && c.has_fill();
+  const V3 fill{hn::Set(d, c.fill.x), hn::Set(d, c.fill.y), hn::Set(d, c.fill.z)};
   HWY_ALIGN float lane_a[kMaxLanes], lane_b[kMaxLanes], lane_c[kMaxLanes], lane_d[kMaxLanes];
   // Per lane: sin and cos of `t` from libm, as the scalar march takes them.
   auto sin_cos = [&](VF t, VF& s, VF& co) {
@@ -101,6 +103,13 @@ void MarchHorizonRow(const SampleView& view, int i0, int j, int count, const flo
           const V3 Ls = Gather3(d, view.radiance, st.k3);
           irradiance = Select(rise, Add3(irradiance, Scale(Scale(Ls, fw), w)), irradiance);
         }
+      }
+      // The band between the gather's horizons sees c.fill (march_horizon.cpp).
+      if (has_fill) {
+        const VF g1 = AntiderivativeAt(d, h1_t, h1_s, h1_c, L.nx, L.ny).ao;
+        const VF g0 = AntiderivativeAt(d, h0_t, h0_s, h0_c, L.nx, L.ny).ao;
+        const VF w = hn::IfThenElseZero(hn::Lt(h0_t, h1_t), hn::Sub(g1, g0));
+        irradiance = Add3(irradiance, Scale(fill, w));
       }
       // std::max(theta1, theta0); integrate_slice(theta0, theta1, nx, ny).
       theta1 = hn::IfThenElse(hn::Lt(theta1, theta0), theta0, theta1);

@@ -85,8 +85,7 @@ const std::vector<ParamInfo>& params_table() {
        "the radiance assumed in the directions where the gather finds no surface: none within "
        "gather_radius, or the screen edge first (light from what the frame does not show); "
        "\"auto\": 0.8 x the frame's mean direct outgoing radiance, DiffCol x DiffDir + Emit "
-       "over its geometry (for enclosed scenes: presets/interior.json); 0: none; method "
-       "bitmask"},
+       "over its geometry (for enclosed scenes: presets/interior.json); 0: none"},
       {"bounces", &Params::bounces, 1, 16, "count",
        "in-frame bounces of indirect light: bounce k gathers the outgoing radiance of bounce k-1"},
       {"ao_multibounce", &Params::ao_multibounce, 0, 1, "bool",
