@@ -112,11 +112,12 @@ povray_table() {
       --ref-layer 'DiffCol*DiffInd' --json | python3 -c 'import json,sys
 o=json.load(sys.stdin)["overall"]; print("%.4f / %+.4f / %.2f" % (o["rmse"], o["mean_error"], o["psnr"]))')"
 }
-# unseen_table: the default preset against presets/interior.json (unseen_radiance "auto"),
-# temporal chain, on the two samples, the POV-Ray room and every folder of $UNSEEN.
+# unseen_table: the default and fast presets without and with unseen_radiance "auto"
+# (presets/interior.json), temporal chain, on the two samples, the POV-Ray room and every
+# folder of $UNSEEN.
 unseen_table() {
   echo
-  echo "unseen_radiance: the defaults (0) against presets/interior.json (\"auto\"), temporal"
+  echo "unseen_radiance: 0 (default, fast) against \"auto\" (interior, fast + auto), temporal"
   echo "chain, indirect against the full-GI render's DiffCol*DiffInd, composite against its"
   echo "Combined $(load):"
   echo
@@ -129,8 +130,10 @@ unseen_table() {
     name=$(basename "$dir")
     [ "$dir" = "$out/povu" ] && name="povray_room"
     b "unseen-$name" "$in" --ref "indirect=$in:DiffCol*DiffInd" --ref "composite=$in:Combined" \
-      --preset presets/default.json --preset presets/interior.json
-    rows "unseen-$name" --prefix "$name" indirect:rmp composite:rmp s
+      --preset presets/default.json --preset presets/interior.json --preset presets/fast.json \
+      --preset "$(preset fast_interior '{"method": "horizon", "slices": 1, "steps": 4, "unseen_radiance": "auto"}')"
+    rows "unseen-$name" --prefix "$name" --label "fast_interior=fast + unseen_radiance auto" \
+      indirect:rmp composite:rmp s
   done
 }
 
