@@ -18,6 +18,7 @@
 #include <map>
 #include <nlohmann/json.hpp>
 #include <regex>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -697,6 +698,27 @@ TEST_F(Cli, InfoListsPassesCameraAndOutputs) {
   const RunResult env = hbil("info " + q(sample(1)) + " --set 'environment=\"rgb:1,1,1\"'");
   ASSERT_EQ(env.code, 0) << env.err;
   EXPECT_TRUE(contains(env.out, "farfield: yes")) << env.out;
+  // unseen_radiance "auto" is printed with its value: 0.8 x the mean DiffCol x DiffDir + Emit
+  // over the geometry, here against the same mean taken from the frame's own pixels.
+  EXPECT_FALSE(contains(r.out, "unseen_radiance")) << r.out;
+  const RunResult interior = hbil("info " + q(sample(1)) + " --preset " +
+                                  q(std::string(HBIL_SOURCE_DIR) + "/presets/interior.json"));
+  ASSERT_EQ(interior.code, 0) << interior.err;
+  const size_t at = interior.out.find("unseen_radiance: auto = ");
+  ASSERT_NE(at, std::string::npos) << interior.out;
+  std::istringstream line(interior.out.substr(at + 24));
+  float red = 0;
+  line >> red;
+  Params p;
+  const io::InputFrame in = io::open_frame(sample(1), 1, p);
+  GBuffer g = io::read_fields(in, {"depth", "diffcol", "diffdir", "emit"}, p);
+  double sum = 0;
+  size_t geometry = 0;
+  for (size_t i = 0; i < g.pixels(); ++i)
+    if (g.depth[i] < 1e9f) sum += g.diffcol[i].x * g.diffdir[i].x + g.emit[i].x, ++geometry;
+  ASSERT_GT(geometry, 0u);
+  const double mean = sum / double(geometry);
+  EXPECT_NEAR(red, 0.8 * mean, 1e-3 * mean) << interior.out;
 
   // Without Normal (and without a sidecar): the outputs cannot be computed and info says
   // why, exit 0 all the same; the camera is solved from Position.

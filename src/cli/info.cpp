@@ -3,6 +3,7 @@
 #include <map>
 
 #include "cli/commands.h"
+#include "hbil/ao_frame.h"
 #include "hbil/error.h"
 #include "hbil/reduced.h"
 #include "hbil/scene_scale.h"
@@ -94,6 +95,20 @@ void info(const std::string& path, const ParamOptions& po) {
       std::string why;
       resolve_scene_params(p, measure_scene(g, io::find_camera(f, g, p), p), &why);
       std::cout << why << "\n";
+    } catch (const Error& e) {
+      std::cout << "not available: " << e.what() << "\n";
+    }
+  }
+  if (p.unseen_radiance_auto) {
+    std::cout << "unseen_radiance: ";
+    try {
+      if (pixels.diffcol.empty() || pixels.diffdir.empty())
+        throw Error(Exit::missing_pass, "needs DiffCol and DiffDir");
+      GBuffer g = pixels;
+      const Camera c = io::find_camera(f, g, p);
+      const Vec3 u = mean_direct_radiance(make_view_gbuffer(g, c, p), g) * kAutoUnseen;
+      std::cout << "auto = " << u.x << " " << u.y << " " << u.z << " (" << kAutoUnseen
+                << " x the mean DiffCol x DiffDir + Emit of the frame's geometry)\n";
     } catch (const Error& e) {
       std::cout << "not available: " << e.what() << "\n";
     }
