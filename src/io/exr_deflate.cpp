@@ -39,14 +39,13 @@ struct Bytes {
   const unsigned char* hi;
   bool split;
   uint32_t sample(size_t j, int size) const {  // the little-endian sample at byte j
-    unsigned char b[4];
-    if (split)
-      for (int k = 0; k < size; ++k) b[k] = (k & 1 ? hi : lo)[(j + k) / 2];
-    else
-      std::memcpy(b, lo + j, size_t(size));
-    return size == 2
-               ? uint32_t(b[0]) | uint32_t(b[1]) << 8
-               : uint32_t(b[0]) | uint32_t(b[1]) << 8 | uint32_t(b[2]) << 16 | uint32_t(b[3]) << 24;
+    uint32_t v = 0;
+    for (int k = 0; k < size; ++k) {
+      const size_t at = j + size_t(k);
+      const unsigned char byte = !split ? lo[at] : (at & 1) ? hi[at / 2] : lo[at / 2];
+      v |= uint32_t(byte) << (8 * k);
+    }
+    return v;
   }
 };
 
