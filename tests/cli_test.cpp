@@ -582,6 +582,20 @@ TEST_F(Cli, NegativeCountsAreUsageErrorsWithAPlainMessage) {
   r = expect_failure(
       "bench " + q(in_frame(1)) + " -o " + q(path("out/b")) + " --ref ao=x.exr:AO --threads -1",
       Exit::usage, {"--threads: must be 0 (all cores) or a positive count"});
+  const std::string bench =
+      "bench " + q(in_frame(1)) + " -o " + q(path("out/b")) + " --ref ao=" + q(in_frame(1)) + ":AO";
+  r = expect_failure(bench + " --runs 0", Exit::usage,
+                     {"--runs: must be a positive number of runs, got \"0\""});
+  EXPECT_LT(r.err.size(), 300u) << r.err;
+  const std::string tune = "tune " + q(in_frame(1)) + " -o " + q(path("out/t.json")) +
+                           " --ref ao=" + q(in_frame(1)) + ":AO";
+  r = expect_failure(tune + " --budget -1", Exit::usage,
+                     {"--budget: must be a number of seconds >= 0, got \"-1\""});
+  EXPECT_LT(r.err.size(), 300u) << r.err;
+  r = expect_failure(tune + " --tolerance nan", Exit::usage,
+                     {"--tolerance: must be a number of decibels >= 0"});
+  EXPECT_FALSE(fs::exists(path("out/b")));
+  EXPECT_FALSE(fs::exists(path("out/t.json")));
 }
 
 // A header that claims more pixels than its file can hold: exit 3 naming the file, from

@@ -13,6 +13,7 @@
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -375,7 +376,8 @@ TEST(DisplayImage, PngHoldsRoundedEightBitValues) {
 TEST(DisplayImage, PngKeepsStraightAlpha) {
   TempDir dir(test::test_name());
   const DisplayTransform t = shipped("sRGB", "Standard");
-  write_display_image(dir / "a.png", {0.18f, 0.18f, 0.18f, 0.5f}, 4, 1, 1, t, "");
+  // Premultiplied 0.09 at alpha 0.5: straight 0.18 goes through the view.
+  write_display_image(dir / "a.png", {0.09f, 0.09f, 0.09f, 0.5f}, 4, 1, 1, t, "");
   // Read as stored: OIIO would otherwise premultiply on reading.
   OIIO::ImageSpec config;
   config.attribute("oiio:UnassociatedAlpha", 1);
@@ -396,11 +398,63 @@ TEST(DisplayImage, ExrIsHalfAndDisplayReferred) {
   const test::Pixels p = read_back(dir / "d.exr");
   EXPECT_EQ(p.spec.format, OIIO::TypeDesc::HALF);
   ASSERT_EQ(p.spec.nchannels, 4);
-  EXPECT_NEAR(p.at(0, 0, 0), kRec1886018, 5e-4);  // half: 11-bit mantissa
+  // Premultiplied 0.18 at alpha 0.25: straight 0.72 through the view, premultiplied again.
+  EXPECT_NEAR(p.at(0, 0, 0), 0.25 * std::pow(0.72, 1 / 2.4), 5e-4);  // half: 11-bit mantissa
   EXPECT_EQ(p.at(0, 0, 3), 0.25f);
   EXPECT_NEAR(p.at(1, 0, 0), std::pow(4.0, 1 / 2.4), 2e-3);  // not clamped
   EXPECT_EQ(p.spec.get_string_attribute("hbil:ocio"), t.describe());
   EXPECT_TRUE(test::files_containing(dir.path(), "hbil-tmp").empty());
+}
+
+// A film-transparent Cycles render (samples/blender/transparent.py): Combined is
+// premultiplied, with fractional alpha along every silhouette. The PNG holds straight
+// colour: each pixel's 8-bit value is the view of Combined / alpha, and its alpha is
+// Combined's. Writing the premultiplied values as straight (what the PNG held before)
+// darkens every edge pixel; the test counts how many pixels tell the two apart.
+TEST(DisplayImage, FilmTransparentRenderGivesAStraightAlphaPng) {
+  TempDir dir(test::test_name());
+  const test::Pixels src =
+      test::read_pixels(test::kSourceDir + "/tests/data/transparent/frame_0001.exr");
+  const int w = src.spec.width, h = src.spec.height;
+  int ch[4];
+  const char* names[4] = {"ViewLayer.Combined.R", "ViewLayer.Combined.G", "ViewLayer.Combined.B",
+                          "ViewLayer.Combined.A"};
+  for (int c = 0; c < 4; ++c) ASSERT_GE(ch[c] = src.spec.channelindex(names[c]), 0) << names[c];
+  std::vector<float> rgba(size_t(w) * h * 4);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      for (int c = 0; c < 4; ++c) rgba[(size_t(y) * w + x) * 4 + c] = src.at(x, y, ch[c]);
+  const DisplayTransform t = shipped("sRGB", "Standard");
+  write_display_image(dir / "c.png", rgba, 4, w, h, t, "");
+  OIIO::ImageSpec config;
+  config.attribute("oiio:UnassociatedAlpha", 1);  // read as stored
+  auto in = OIIO::ImageInput::open(dir / "c.png", &config);
+  ASSERT_TRUE(in) << OIIO::geterror();
+  std::vector<uint8_t> png(size_t(w) * h * 4);
+  ASSERT_TRUE(in->read_image(0, 0, 0, 4, OIIO::TypeDesc::UINT8, png.data()));
+  int partial = 0, distinguished = 0, transparent = 0;
+  for (size_t i = 0; i < size_t(w) * h; ++i) {
+    const float a = rgba[4 * i + 3];
+    EXPECT_EQ(int(png[4 * i + 3]), int(std::lround(255 * std::clamp(a, 0.f, 1.f)))) << i;
+    if (a <= 0) {
+      ++transparent;
+      for (int c = 0; c < 3; ++c) EXPECT_EQ(int(png[4 * i + c]), 0) << i;
+      continue;
+    }
+    const bool edge = a < 0.99f;
+    partial += edge;
+    bool differs = false;
+    for (int c = 0; c < 3; ++c) {
+      const double straight = srgb_encode(std::clamp(double(rgba[4 * i + c]) / a, 0.0, 1.0));
+      const double premult = srgb_encode(std::clamp(double(rgba[4 * i + c]), 0.0, 1.0));
+      EXPECT_NEAR(png[4 * i + c], 255 * straight, 1.0) << "pixel " << i << " channel " << c;
+      differs = differs || std::abs(255 * (straight - premult)) > 2;
+    }
+    distinguished += edge && differs;
+  }
+  EXPECT_GT(transparent, w * h / 4);
+  EXPECT_GT(partial, 50);
+  EXPECT_GT(distinguished, partial / 2);
 }
 
 TEST(DisplayImage, JpegDropsAlpha) {

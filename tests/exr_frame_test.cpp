@@ -12,6 +12,8 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <limits>
 #include <string>
 #include <vector>
@@ -232,6 +234,73 @@ TEST_F(ExrFrame, InfiniteNormalIsBadData) {
   const InputFrame f = open_frame(path, 11, p);
   expect_error([&] { read_fields(f, fields_needed(f, p), p); }, Exit::bad_data,
                {"frame 11", path, "ViewLayer.Normal.Y", "pixel (0, 1)", "inf"});
+}
+
+// A channel of an undefined pixel type made OpenImageIO abort the process (found by
+// tests/fuzz/fuzz_frame), and a sampling of 0 would divide by zero: both refused, exit 3.
+TEST(ExrLayouts, UndefinedPixelTypeOrSamplingIsRefusedBeforeReading) {
+  TempDir dir{test::test_name()};
+  std::ifstream in(test::kRoomPoles + "/frame_0001.exr", std::ios::binary);
+  const std::string good((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  // "channels\0chlist\0", the list's size (4 bytes), then the first channel's name.
+  const size_t list = good.find(std::string("channels\0chlist\0", 16)) + 16 + 4;
+  const size_t name_end = good.find('\0', list);
+  const std::string first = good.substr(list, name_end - list);
+  ASSERT_EQ(first, "BackFaces.Depth.Z");
+  struct Case {
+    size_t offset;  // from the end of the name
+    const char* message;
+  } cases[] = {{1, "has pixel type 3"}, {9, "has sampling 0x1"}, {13, "has sampling 1x0"}};
+  for (const Case& c : cases) {
+    std::string bytes = good;
+    const int value = c.offset == 1 ? 3 : 0;
+    for (int b = 0; b < 4; ++b) bytes[name_end + c.offset + b] = char(b == 0 ? value : 0);
+    const std::string damaged = dir / "damaged.exr";
+    std::ofstream(damaged, std::ios::binary | std::ios::trunc) << bytes;
+    expect_error([&] { open_frame(damaged, 1, Params{}); }, Exit::input,
+                 {damaged, "damaged OpenEXR header", "\"" + first + "\"", c.message});
+  }
+}
+
+// Finite values no render writes, whose products would overflow float in the gather and
+// reach the output as Inf (found by tests/fuzz/fuzz_frame: -1.7e38 in every pass): refused
+// like non-finite ones, at the bound and not below it.
+TEST_F(ExrFrame, ColourAndMotionBeyondTheirBoundsAreBadData) {
+  auto channels = blender_channels("ViewLayer");
+  for (const char* c : {"DiffCol.R", "DiffCol.G", "DiffCol.B", "Emit.R", "Emit.G", "Emit.B",
+                        "Vector.X", "Vector.Y", "Vector.Z", "Vector.W"})
+    channels.push_back(std::string("ViewLayer.") + c);
+  struct Case {
+    const char* channel;
+    float value;
+    bool refused;
+    const char* why;
+  } cases[] = {{"ViewLayer.DiffCol.G", 1000.f, false, ""},
+               {"ViewLayer.DiffCol.G", 1001.f, true, "diffcol beyond +-1000 (an albedo)"},
+               {"ViewLayer.Emit.B", 1e9f, false, ""},
+               {"ViewLayer.Emit.B", -2e9f, true, "emit beyond +-1e9"},
+               {"ViewLayer.Vector.X", -1e6f, false, ""},
+               {"ViewLayer.Vector.Y", 3e6f, true, "vector beyond +-1e6 pixels"}};
+  Params p;
+  p.outputs = {"ao", "composite"};
+  p.passes["emit"] = "Emit";
+  int k = 0;
+  for (const Case& c : cases) {
+    SCOPED_TRACE(std::string(c.channel) + " = " + std::to_string(c.value));
+    const std::string path = file("bound" + std::to_string(k++) + ".exr");
+    test::write_exr(path, kW, kH, channels, [&](int x, int y, int ch) {
+      if (channels[ch] == c.channel && x == 2 && y == 7) return c.value;
+      if (channels[ch].find("Vector") != std::string::npos) return 0.25f;
+      return value_for(channels[ch], x, y);
+    });
+    const InputFrame f = open_frame(path, 1, p);
+    std::vector<std::string> fields = {"depth", "normal", "diffcol", "emit", "vector"};
+    if (c.refused)
+      expect_error([&] { read_fields(f, fields, p); }, Exit::bad_data,
+                   {path, c.channel, c.why, "pixel (2, 7)"});
+    else
+      EXPECT_NO_THROW(read_fields(f, fields, p));
+  }
 }
 
 TEST_F(ExrFrame, BackgroundDepthIsAccepted) {
@@ -479,6 +548,20 @@ void write_tiled(const std::string& src, const std::string& dst, int tile) {
   ASSERT_TRUE(out->close());
 }
 
+// The G-buffer fields of two reads are the same to the bit.
+void expect_same_fields(const GBuffer& ga, const GBuffer& gb) {
+  ASSERT_EQ(ga.pixels(), gb.pixels());
+  EXPECT_EQ(ga.depth, gb.depth);
+  EXPECT_EQ(ga.backdepth, gb.backdepth);
+  EXPECT_EQ(ga.alpha, gb.alpha);
+  EXPECT_EQ(ga.motion, gb.motion);
+  ASSERT_EQ(ga.normal.size(), gb.normal.size());
+  EXPECT_EQ(0, std::memcmp(ga.normal.data(), gb.normal.data(), ga.normal.size() * sizeof(Vec3)));
+  ASSERT_EQ(ga.diffcol.size(), gb.diffcol.size());
+  EXPECT_EQ(0, std::memcmp(ga.diffcol.data(), gb.diffcol.data(), ga.diffcol.size() * sizeof(Vec3)));
+  EXPECT_FALSE(ga.diffcol.empty());
+}
+
 TEST(ExrLayouts, TiledFileGivesTheScanlineTwinsPixels) {
   TempDir dir{test::test_name()};
   const std::string src = test::kRoomPoles + "/frame_0001.exr";
@@ -489,19 +572,67 @@ TEST(ExrLayouts, TiledFileGivesTheScanlineTwinsPixels) {
     const InputFrame a = open_frame(src, 1, p), b = open_frame(tiled, 1, p);
     ASSERT_GT(b.spec.tile_width, 0);
     const std::vector<std::string> need = fields_needed(a, p);
-    const GBuffer ga = read_fields(a, need, p), gb = read_fields(b, need, p);
-    ASSERT_EQ(ga.pixels(), gb.pixels());
-    EXPECT_EQ(ga.depth, gb.depth);
-    EXPECT_EQ(ga.backdepth, gb.backdepth);
-    EXPECT_EQ(ga.alpha, gb.alpha);
-    EXPECT_EQ(ga.motion, gb.motion);
-    ASSERT_EQ(ga.normal.size(), gb.normal.size());
-    EXPECT_EQ(0, std::memcmp(ga.normal.data(), gb.normal.data(), ga.normal.size() * sizeof(Vec3)));
-    ASSERT_EQ(ga.diffcol.size(), gb.diffcol.size());
-    EXPECT_EQ(0,
-              std::memcmp(ga.diffcol.data(), gb.diffcol.data(), ga.diffcol.size() * sizeof(Vec3)));
-    EXPECT_FALSE(ga.diffcol.empty());
+    expect_same_fields(read_fields(a, need, p), read_fields(b, need, p));
   }
+}
+
+// A multi-part file whose first part is a beauty image (Combined RGBA alone), as compositing
+// packages write them, and whose second holds the passes: the second is read, with the
+// pixels of the single-part original, through both the float and the half-keeping read.
+TEST(ExrLayouts, MultiPartFileIsReadFromThePartHoldingThePasses) {
+  TempDir dir{test::test_name()};
+  const std::string src = test::kRoomPoles + "/frame_0001.exr";
+  const std::string multi = dir / "multipart.exr";
+  {
+    auto in = OIIO::ImageInput::open(src);
+    ASSERT_TRUE(in) << OIIO::geterror();
+    const OIIO::ImageSpec passes = in->spec();
+    std::vector<unsigned char> native(passes.image_bytes(true));
+    ASSERT_TRUE(in->read_image(0, 0, 0, passes.nchannels, OIIO::TypeUnknown, native.data()));
+    OIIO::ImageSpec beauty(passes.width, passes.height, 4, OIIO::TypeDesc::HALF);
+    beauty.channelnames = {"R", "G", "B", "A"};
+    beauty.alpha_channel = 3;
+    const std::vector<float> grey(size_t(passes.width) * passes.height * 4, 0.5f);
+    const OIIO::ImageSpec specs[2] = {beauty, passes};
+    auto out = OIIO::ImageOutput::create(multi);
+    ASSERT_TRUE(out && out->supports("multiimage"));
+    ASSERT_TRUE(out->open(multi, 2, specs)) << out->geterror();
+    ASSERT_TRUE(out->write_image(OIIO::TypeDesc::FLOAT, grey.data())) << out->geterror();
+    ASSERT_TRUE(out->open(multi, passes, OIIO::ImageOutput::AppendSubimage)) << out->geterror();
+    ASSERT_TRUE(out->write_image(OIIO::TypeUnknown, native.data())) << out->geterror();
+    ASSERT_TRUE(out->close());
+  }
+  Params p;
+  const InputFrame a = open_frame(src, 1, p), b = open_frame(multi, 1, p);
+  EXPECT_EQ(a.part, 0);
+  EXPECT_EQ(b.part, 1);
+  EXPECT_EQ(b.channels, a.channels);
+  const std::vector<std::string> need = fields_needed(a, p);
+  expect_same_fields(read_fields(a, need, p), read_fields(b, need, p));
+  GBuffer ha = read_fields(a, need, p, true), hb = read_fields(b, need, p, true);
+  ha.unpack();
+  hb.unpack();
+  expect_same_fields(ha, hb);
+}
+
+// OpenEXR sizes an attribute's buffer from the size its header claims before reading it: a
+// claim beyond the end of the file is refused first (exit 3, naming the file and attribute).
+// Found by tests/fuzz/fuzz_povray: a 23 KB file made OpenEXR fill 2 GB.
+TEST(ExrLayouts, AttributeClaimingMoreThanTheFileIsRefusedBeforeReading) {
+  TempDir dir{test::test_name()};
+  std::ifstream in(test::kRoomPoles + "/frame_0001.exr", std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  // The first attribute after the version: name, type, then its 4-byte size.
+  size_t at = 8;
+  at = bytes.find('\0', at) + 1;
+  at = bytes.find('\0', at) + 1;
+  const std::string name = bytes.substr(8, bytes.find('\0', 8) - 8);
+  bytes[at] = char(0x00), bytes[at + 1] = char(0x00), bytes[at + 2] = char(0x00),
+  bytes[at + 3] = char(0x70);  // 0x70000000: 1.9 GB
+  const std::string damaged = dir / "damaged.exr";
+  std::ofstream(damaged, std::ios::binary) << bytes;
+  expect_error([&] { open_frame(damaged, 1, Params{}); }, Exit::input,
+               {damaged, "damaged OpenEXR header", "\"" + name + "\"", "1879048192 bytes"});
 }
 
 // Colour fields kept as half (read_fields with keep_half, what `hbil run` does): the packed

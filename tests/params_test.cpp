@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "hbil/error.h"
+#include "io/preset_file.h"
 #include "test_util.h"
 
 namespace hbil {
@@ -269,6 +270,25 @@ TEST(Params, ApplySetErrorsNameTheAssignment) {
   expect_error([&] { apply_set(p, "passes.velocity=Vector"); }, Exit::preset, {"passes.velocity"});
   expect_error([&] { apply_set(p, R"(outputs=["ao","gi"])"); }, Exit::preset,
                {"unknown output 'gi'"});
+  // Found by tests/fuzz/fuzz_preset: a bare word that is not UTF-8 (here Latin-1) made the
+  // error message itself throw, and the tool answered "internal error".
+  expect_error([&] { apply_set(p, "outputs=[\"ao\",\"composit\xce\"]"); }, Exit::preset,
+               {"not valid UTF-8"});
+  expect_error([&] { apply_set(p, "view_layer=Vi\xe9w"); }, Exit::preset, {"not valid UTF-8"});
+}
+
+// A preset file is refused with exit 7 naming it, whatever is wrong with its JSON. Found by
+// tests/fuzz/fuzz_preset: a number beyond double's range (nlohmann's out_of_range, not a
+// parse_error) escaped as "internal error".
+TEST(Params, MalformedPresetFilesAreExit7NamingTheFile) {
+  test::TempDir dir{test::test_name()};
+  const std::string path = dir / "preset.json";
+  for (const std::string text : {"{\"radius\": 1e999}", "{\"radius\": ", "[1, 2]", "\"\xff\""}) {
+    SCOPED_TRACE(text);
+    std::ofstream(path) << text;
+    expect_error([&] { io::read_preset(path); }, Exit::preset, {path});
+  }
+  expect_error([&] { io::read_preset(dir / "missing.json"); }, Exit::preset, {"file not found"});
 }
 
 TEST(Params, ShippedPresetsLoad) {

@@ -405,13 +405,16 @@ def render_frames(scene, out_dir, frames):
     return times
 
 
-def run(name, build):
-    """Entry point used by the scene scripts: build(scene) creates the scene."""
+def run(name, build, film_transparent=False):
+    """Entry point used by the scene scripts: build(scene) creates the scene.
+    film_transparent: the world is not rendered where nothing is hit (Combined alpha 0 there,
+    premultiplied colour elsewhere), as for a render to be composited over a plate."""
     a = parse_args()
     scene = clear_scene()
     scene.name = name
     build(scene)
     configure(scene, a.mode, a.samples, a.seed, size=a.size, bounces=a.bounces)
+    scene.render.film_transparent = film_transparent
     if a.save_blend:
         bpy.ops.wm.save_as_mainfile(filepath=os.path.abspath(a.save_blend), compress=True)
     if a.no_render:

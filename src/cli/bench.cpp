@@ -9,6 +9,7 @@
 
 #include "cli/commands.h"
 #include "hbil/error.h"
+#include "io/preset_file.h"
 
 namespace hbil::cli {
 
@@ -38,7 +39,7 @@ void bench(const BenchOptions& o) {
   };
   if (o.presets.empty()) bases.push_back({"default", with_sets(Params{})});
   for (const std::string& f : o.presets)
-    bases.push_back({std::filesystem::path(f).stem().string(), with_sets(read_preset(f))});
+    bases.push_back({std::filesystem::path(f).stem().string(), with_sets(io::read_preset(f))});
   s.configs = pipeline::expand_sweeps(bases, o.sweeps);
   s.mask.background_depth = s.configs.front().params.background_depth;
   const auto threads = o.shot.limit_threads();
@@ -114,7 +115,7 @@ void add_bench(CLI::App& app) {
       ->allow_extra_args(false);
   cmd->add_option("--runs", o->runs, "timed runs per configuration, alternated (medians)")
       ->default_val(1)
-      ->check(CLI::PositiveNumber);
+      ->check(count_check("a positive number of runs", 1));
   cmd->add_flag("--stability", o->stability,
                 "also the stability figures: flicker, revealed pixels, cut, screen edge, thin "
                 "objects, bad pixels (stability.csv; man hbil, bench)");

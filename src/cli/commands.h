@@ -39,13 +39,13 @@ struct ShotOptions {
   std::unique_ptr<tbb::global_control> limit_threads() const;
 };
 
-// A check for an option that takes a count: a whole number >= 0; else CLI11's error
-// "<option>: must be <meaning>" (e.g. "0 (all cores) or a positive count"), exit 2.
-CLI::Validator count_check(const std::string& meaning);
+// A check for an option that takes a count: a whole number >= `least` (0 or 1); else
+// CLI11's error "<option>: must be <meaning>" (e.g. "0 (all cores) or a positive count"),
+// exit 2.
+CLI::Validator count_check(const std::string& meaning, int least = 0);
+// The same for a number of seconds or decibels: finite and >= 0.
+CLI::Validator amount_check(const std::string& meaning);
 inline const std::string kThreadsMeaning = "0 (all cores) or a positive count";
-
-// Defaults, then the keys of a JSON preset file. Throws Error(Exit::preset).
-Params read_preset(const std::string& path);
 
 void add_run(CLI::App& app);
 void add_bench(CLI::App& app);

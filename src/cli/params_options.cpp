@@ -1,11 +1,7 @@
 // params_options.cpp: --preset and --set.
-#include <cerrno>
-#include <cstring>
-#include <filesystem>
-#include <fstream>
-
 #include "cli/commands.h"
 #include "hbil/error.h"
+#include "io/preset_file.h"
 
 namespace hbil::cli {
 
@@ -25,27 +21,9 @@ void ParamOptions::add_to(CLI::App& app) {
                   ->default_str(std::to_string(d.steps));
 }
 
-Params read_preset(const std::string& path) {
-  // Missing or unreadable is a preset error (exit 7) like a malformed one, named by path.
-  std::error_code ec;
-  if (!std::filesystem::exists(path, ec))
-    throw Error(Exit::preset, "--preset " + path + ": file not found");
-  if (std::filesystem::is_directory(path, ec))
-    throw Error(Exit::preset, "--preset " + path + ": is a folder, not a JSON file");
-  std::ifstream in(path);
-  if (!in) throw Error(Exit::preset, "--preset " + path + ": cannot read: " + std::strerror(errno));
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(in);
-  } catch (const nlohmann::json::parse_error& e) {
-    throw Error(Exit::preset, path + ": not valid JSON: " + e.what());
-  }
-  return params_from_json(j, path);
-}
-
 Params ParamOptions::load() const {
   Params p;
-  if (!preset.empty()) p = read_preset(preset);
+  if (!preset.empty()) p = io::read_preset(preset);
   // The shorthands apply before the --set list, so an explicit --set wins.
   if (radius_opt->count()) p = apply_set(p, "radius=" + nlohmann::json(radius).dump());
   if (slices_opt->count()) p = apply_set(p, "slices=" + std::to_string(slices));

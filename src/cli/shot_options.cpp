@@ -1,21 +1,35 @@
 // shot_options.cpp: the options bench and tune share (commands.h).
 #include <charconv>
+#include <cmath>
 
 #include "cli/commands.h"
 
 namespace hbil::cli {
 
-CLI::Validator count_check(const std::string& meaning) {
+CLI::Validator count_check(const std::string& meaning, int least) {
   return CLI::Validator(
-      [meaning](std::string& text) -> std::string {
+      [meaning, least](std::string& text) -> std::string {
         int v = -1;
         const char* end = text.data() + text.size();
         const auto [ptr, ec] = std::from_chars(text.data(), end, v);
-        if (ec != std::errc() || ptr != end || v < 0)
+        if (ec != std::errc() || ptr != end || v < least)
           return "must be " + meaning + ", got \"" + text + "\"";
         return "";
       },
       "COUNT");
+}
+
+CLI::Validator amount_check(const std::string& meaning) {
+  return CLI::Validator(
+      [meaning](std::string& text) -> std::string {
+        double v = -1;
+        const char* end = text.data() + text.size();
+        const auto [ptr, ec] = std::from_chars(text.data(), end, v);
+        if (ec != std::errc() || ptr != end || !std::isfinite(v) || v < 0)
+          return "must be " + meaning + ", got \"" + text + "\"";
+        return "";
+      },
+      "NUMBER");
 }
 
 void ShotOptions::add_to(CLI::App& cmd, const std::string& ref_help) {

@@ -82,10 +82,10 @@ void add_tune(CLI::App& app) {
   cmd->add_option("--budget", o->budget,
                   "seconds per frame: the most accurate preset within it (default: none, the "
                   "cheapest within --tolerance of the most accurate found)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(amount_check("a number of seconds >= 0"));
   cmd->add_option("--tolerance", o->tolerance, "dB below the best still accepted without --budget")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
+      ->check(amount_check("a number of decibels >= 0"));
   cmd->add_option("--keys", o->keys,
                   "k1,k2,...: search only these keys (of method, slices, steps, gather_steps, "
                   "gather_radius, thickness, gather_thickness; default: all)")

@@ -42,8 +42,9 @@ void GBuffer::unpack() {
     for (size_t b = 0; b < t.size(); ++b) t[b] = half_to_float(std::uint16_t(b));
     return t;
   }();
-  for (auto& [field, bits] : packed) {
-    std::vector<Vec3>& v = *rgb(field);
+  for (auto& entry : packed) {
+    std::vector<std::uint16_t>& bits = entry.second;  // not a structured binding: clang 14
+    std::vector<Vec3>& v = *rgb(entry.first);         // cannot capture one in a lambda
     v.resize(bits.size() / 3);
     tbb::parallel_for(size_t(0), v.size(), size_t(4096), [&](size_t i0) {
       for (size_t i = i0; i < std::min(v.size(), i0 + 4096); ++i)

@@ -357,6 +357,13 @@ Params apply_set(const Params& p, const std::string& assignment) {
   const std::string where = "--set " + assignment;
   auto eq = assignment.find('=');
   if (eq == std::string::npos || eq == 0) fail(where, "expected key=value");
+  // Bare words become JSON strings, which must be UTF-8 (hbil writes its parameters into
+  // every output as JSON).
+  try {
+    (void)json(assignment).dump();
+  } catch (const json::type_error&) {
+    fail(where, "not valid UTF-8 text");
+  }
   std::string key = assignment.substr(0, eq), text = assignment.substr(eq + 1);
   json value = json::parse(text, nullptr, /*allow_exceptions=*/false);
   if (value.is_discarded()) value = text;  // bare words are strings: passes.depth=Depth

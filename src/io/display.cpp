@@ -239,8 +239,8 @@ std::string write_display_temporary(const std::string& final_path, const std::ve
     spec.attribute("png:compressionLevel", 1);
     spec.attribute("png:filter", 8);  // PNG_FILTER_NONE
   }
-  // Colour and alpha are written as they are (straight alpha): no (de)association.
-  if (fc == 4) spec.attribute("oiio:UnassociatedAlpha", 1);
+  // PNG gets straight colour (see above): OpenImageIO must not divide it by alpha again.
+  if (fc == 4 && !exr) spec.attribute("oiio:UnassociatedAlpha", 1);
   spec.attribute("Software", "hbil " HBIL_VERSION);
   spec.attribute("hbil:version", HBIL_VERSION);
   spec.attribute("hbil:ocio", t.describe());
@@ -267,7 +267,21 @@ std::string write_display_temporary(const std::string& final_path, const std::ve
     } else {
       std::copy_n(pixels.begin() + std::ptrdiff_t(first * tc), n * tc, buf.begin());
     }
+    if (tc == 4)  // premultiplied -> straight, for the transform
+      for (size_t i = 0; i < n; ++i) {
+        float* px = &buf[4 * i];
+        const float k = px[3] > 0 ? 1.0f / px[3] : 0.0f;
+        px[0] *= k, px[1] *= k, px[2] *= k;
+      }
     t.apply(buf, width, rows, tc);
+    if (tc == 4 && fc == 4 && !exr) {
+      // PNG: straight colour and alpha as they are.
+    } else if (tc == 4) {
+      for (size_t i = 0; i < n; ++i) {  // EXR premultiplied again; JPEG over black
+        float* px = &buf[4 * i];
+        px[0] *= px[3], px[1] *= px[3], px[2] *= px[3];
+      }
+    }
     if (exr) {
       ok = out->write_scanlines(y0, y0 + rows, 0, OIIO::TypeDesc::FLOAT, buf.data());
       continue;

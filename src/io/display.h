@@ -78,16 +78,19 @@ class DisplayTransform {
 // The display image formats, chosen by the extension (case-insensitive):
 //   .png, .jpg, .jpeg  8 bits per channel: round(255 * clamp(v, 0, 1)), NaN -> 0
 //   .exr               half float, display-referred, unclamped, ZIP
-// PNG and EXR keep alpha; JPEG drops it. Returns true for those extensions.
+// PNG and EXR keep alpha; JPEG drops it. RGBA is transformed as straight colour (divided
+// by alpha; 0 where alpha is 0), since a view transform is not linear. PNG stores that
+// straight colour, as PNG defines; EXR multiplies it by alpha again (EXR is premultiplied);
+// JPEG shows it over black (also multiplied by alpha). Returns true for those extensions.
 bool is_display_image_path(const std::string& path);
 
 // Writes a display image of `pixels` (channels 1 = grey, replicated to RGB before the
-// transform; 3 = RGB; 4 = RGBA) to a temporary file beside `final_path` (creating its
-// folder) and returns the temporary's path; io::commit() (exr_output.h) renames it into
-// place. Metadata: hbil:ocio = t.describe(), hbil:version, Software, and
-// ImageDescription = extra_description when that is not empty. Throws Error(Exit::output),
-// also for an unsupported extension (check is_display_image_path() first to report that as
-// a usage error).
+// transform; 3 = RGB; 4 = RGBA, colour premultiplied by alpha as in Blender's passes) to
+// a temporary file beside `final_path` (creating its folder) and returns the temporary's path;
+// io::commit() (exr_output.h) renames it into place. Metadata: hbil:ocio = t.describe(),
+// hbil:version, Software, and ImageDescription = extra_description when that is not empty. Throws
+// Error(Exit::output), also for an unsupported extension (check is_display_image_path() first to
+// report that as a usage error).
 std::string write_display_temporary(const std::string& final_path, const std::vector<float>& pixels,
                                     int channels, int width, int height, const DisplayTransform& t,
                                     const std::string& extra_description);

@@ -47,7 +47,7 @@ SH9 parse_constant(const std::string& spec) {
 SH9 read_equirect(const std::string& path) {
   const std::string where = "environment " + path;
   if (!fs::exists(path)) throw Error(Exit::input, where + ": file not found");
-  auto in = OIIO::ImageInput::open(path);
+  auto in = open_image_input(path, where);
   if (!in) throw Error(Exit::input, where + ": cannot read: " + OIIO::geterror());
   const OIIO::ImageSpec spec = in->spec();
   if (spec.deep) throw Error(Exit::input, where + ": deep images are not supported");

@@ -5,10 +5,13 @@
 #include <OpenEXR/ImfFrameBuffer.h>
 #include <OpenEXR/ImfHeader.h>
 #include <OpenEXR/ImfInputFile.h>
+#include <OpenEXR/ImfInputPart.h>
+#include <OpenEXR/ImfMultiPartInputFile.h>
 #include <OpenEXR/ImfThreading.h>
 
 #include <cmath>
 #include <filesystem>
+#include <optional>
 #include <sstream>
 
 #include "hbil/error.h"
@@ -73,23 +76,16 @@ std::string join(const std::vector<std::string>& v, const std::string& sep = ", 
 
 }  // namespace
 
-InputFrame open_frame(const std::string& path, int frame, const Params& p) {
-  InputFrame f;
-  f.path = path;
-  f.frame = frame;
-  if (!fs::exists(path)) throw Error(Exit::input, f.where() + ": file not found");
-  auto in = OIIO::ImageInput::open(path);
-  if (!in) throw Error(Exit::input, f.where() + ": cannot read: " + OIIO::geterror());
-  f.spec = in->spec();
-  f.openexr = std::string(in->format_name()) == "openexr";
-  in->close();
-  if (f.spec.deep) throw Error(Exit::input, f.where() + ": deep images are not supported");
-  check_header_size(path, f.spec, f.openexr, f.where());  // before anything is sized from it
+namespace {
 
+// The view layer and the channels of every field in f.spec (see InputFrame).
+void resolve_channels(InputFrame& f, const Params& p) {
   // View layer: given, or the prefix of the first channel that ends in .<normal pass>.X, else
   // .<depth pass>.Z (Blender's default is "ViewLayer"), never the back-face layer's depth
   // (a "BackFaces" layer has Depth only and sorts first).
   f.view_layer = p.view_layer;
+  f.channels.clear();
+  f.wanted.clear();
   const json& back = p.passes.count("backdepth") ? p.passes.at("backdepth") : json();
   const std::string back_channel = back.is_string() ? back.get<std::string>() : "";
   if (f.view_layer.empty()) {
@@ -123,6 +119,34 @@ InputFrame open_frame(const std::string& path, int frame, const Params& p) {
       }
     }
   }
+}
+
+}  // namespace
+
+InputFrame open_frame(const std::string& path, int frame, const Params& p) {
+  InputFrame f;
+  f.path = path;
+  f.frame = frame;
+  if (!fs::exists(path)) throw Error(Exit::input, f.where() + ": file not found");
+  auto in = open_image_input(path, f.where());
+  if (!in) throw Error(Exit::input, f.where() + ": cannot read: " + OIIO::geterror());
+  f.openexr = std::string(in->format_name()) == "openexr";
+  // A multi-part file: the part that holds the most G-buffer fields (the first of equals),
+  // so that a beauty part written before the passes is passed over.
+  size_t best = 0;
+  for (int part = 0; in->seek_subimage(part, 0); ++part) {
+    InputFrame candidate = f;
+    candidate.part = part;
+    candidate.spec = in->spec();
+    resolve_channels(candidate, p);
+    if (part == 0 || candidate.channels.size() > best) {
+      best = candidate.channels.size();
+      f = std::move(candidate);
+    }
+  }
+  in->close();
+  if (f.spec.deep) throw Error(Exit::input, f.where() + ": deep images are not supported");
+  check_header_size(path, f.spec, f.openexr, f.where());  // before anything is sized from it
   return f;
 }
 
@@ -228,8 +252,19 @@ struct FieldTarget {
 void read_exr_channels(const InputFrame& f, const std::vector<FieldTarget>& fields) {
   if (fields.empty()) return;
   try {
-    Imf::InputFile file(f.path.c_str(), Imf::globalThreadCount());
-    const Imath::Box2i dw = file.header().dataWindow();
+    // Part 0 (every single-part file) through InputFile, which the deflate path takes;
+    // another part of a multi-part file through InputPart.
+    std::optional<Imf::InputFile> single;
+    std::optional<Imf::MultiPartInputFile> multi;
+    std::optional<Imf::InputPart> part;
+    if (f.part == 0) {
+      single.emplace(f.path.c_str(), Imf::globalThreadCount());
+    } else {
+      multi.emplace(f.path.c_str(), Imf::globalThreadCount());
+      part.emplace(*multi, f.part);
+    }
+    const Imf::Header& header = single ? single->header() : part->header();
+    const Imath::Box2i dw = header.dataWindow();
     const size_t w = size_t(dw.max.x - dw.min.x + 1), h = size_t(dw.max.y - dw.min.y + 1);
     if (int(w) != f.spec.width || int(h) != f.spec.height)
       throw Error(Exit::input, f.where() + ": the data window changed since the header was read");
@@ -238,7 +273,7 @@ void read_exr_channels(const InputFrame& f, const std::vector<FieldTarget>& fiel
       for (size_t c = 0; c < t.idx.size(); ++c)
         targets.push_back({f.spec.channelnames[t.idx[c]], t.half ? nullptr : t.dst + c,
                            t.idx.size(), t.half ? t.half + c : nullptr});
-    if (read_deflate_scanlines(file, targets)) return;
+    if (single && read_deflate_scanlines(*single, targets)) return;
     Imf::FrameBuffer fb;
     for (const FieldTarget& t : fields) {
       const size_t m = t.idx.size();
@@ -249,8 +284,13 @@ void read_exr_channels(const InputFrame& f, const std::vector<FieldTarget>& fiel
                          : Imf::Slice::Make(Imf::FLOAT, t.dst + c, dw, sizeof(float) * m,
                                             sizeof(float) * m * w));
     }
-    file.setFrameBuffer(fb);
-    file.readPixels(dw.min.y, dw.max.y);
+    if (single) {
+      single->setFrameBuffer(fb);
+      single->readPixels(dw.min.y, dw.max.y);
+    } else {
+      part->setFrameBuffer(fb);
+      part->readPixels(dw.min.y, dw.max.y);
+    }
   } catch (const Error&) {
     throw;
   } catch (const std::exception& e) {
@@ -260,7 +300,7 @@ void read_exr_channels(const InputFrame& f, const std::vector<FieldTarget>& fiel
 
 void read_channels(const InputFrame& f, const std::vector<FieldTarget>& fields) {
   if (fields.empty()) return;
-  auto in = OIIO::ImageInput::open(f.path);
+  auto in = open_image_input(f.path, f.where());
   if (!in) throw Error(Exit::input, f.where() + ": cannot read: " + OIIO::geterror());
   const int w = f.spec.width, h = f.spec.height;
   int lo = f.spec.nchannels, hi = 0;
@@ -270,8 +310,8 @@ void read_channels(const InputFrame& f, const std::vector<FieldTarget>& fields) 
   std::vector<float> block(size_t(w) * rows * n);
   for (int y0 = 0; y0 < h; y0 += rows) {
     const int y1 = std::min(h, y0 + rows);
-    if (!in->read_scanlines(0, 0, f.spec.y + y0, f.spec.y + y1, 0, lo, hi, OIIO::TypeDesc::FLOAT,
-                            block.data()))
+    if (!in->read_scanlines(f.part, 0, f.spec.y + y0, f.spec.y + y1, 0, lo, hi,
+                            OIIO::TypeDesc::FLOAT, block.data()))
       throw Error(Exit::input, f.where() + ": cannot read rows " + std::to_string(y0) + "-" +
                                    std::to_string(y1 - 1) + ": " + in->geterror());
     for (const FieldTarget& t : fields) {
@@ -282,6 +322,9 @@ void read_channels(const InputFrame& f, const std::vector<FieldTarget>& fields) 
     }
   }
 }
+
+// The largest magnitudes read_fields takes (see exr_frame.h).
+constexpr float kMaxColour = 1e9f, kMaxAlbedo = 1e3f, kMaxMotion = 1e6f;
 
 [[noreturn]] void bad_value(const InputFrame& f, int channel, size_t i, float v,
                             const std::string& what) {
@@ -351,13 +394,23 @@ GBuffer read_fields(const InputFrame& f, const std::vector<std::string>& fields,
     } else if (field == "vector") {
       // Blender: the previous-frame position of pixel (col, row), rows top-down, is
       // (col + X, row − Y) (samples/README.md); stored as the raster offset (X, −Y).
-      for (size_t i = 0; i < count; ++i)
+      for (size_t i = 0; i < count; ++i) {
         if (!std::isfinite(v[i])) bad_value(f, idx[i % 2], i / 2, v[i], "non-finite vector");
+        if (std::abs(v[i]) > kMaxMotion)
+          bad_value(f, idx[i % 2], i / 2, v[i], "vector beyond +-1e6 pixels");
+      }
       for (size_t i = 1; i < count; i += 2) g.motion[i] = -g.motion[i];
     } else {
+      // Normal, position and colour passes. The bounds keep every product of them (an albedo times
+      // light, for each bounce) finite in float; no render comes near them.
+      const bool albedo = field.size() > 3 && field.compare(field.size() - 3, 3, "col") == 0;
+      const float bound = albedo ? kMaxAlbedo : kMaxColour;
       const std::string what = "non-finite " + field;
-      for (size_t i = 0; i < count; ++i)
+      const std::string beyond = field + (albedo ? " beyond +-1000 (an albedo)" : " beyond +-1e9");
+      for (size_t i = 0; i < count; ++i) {
         if (!std::isfinite(v[i])) bad_value(f, idx[i % m], i / m, v[i], what);
+        if (std::abs(v[i]) > bound) bad_value(f, idx[i % m], i / m, v[i], beyond);
+      }
     }
   }
   return g;

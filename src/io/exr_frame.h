@@ -27,7 +27,8 @@ const std::vector<std::string>& field_components(const std::string& field);
 struct InputFrame {
   std::string path;
   int frame = 0;
-  OIIO::ImageSpec spec;
+  int part = 0;            // of a multi-part file: the one holding the passes (its subimage index)
+  OIIO::ImageSpec spec;    // that part's
   bool openexr = false;    // an OpenEXR file (read through OpenEXR itself)
   std::string view_layer;  // "" when channels have no layer
   std::map<std::string, std::vector<int>>
@@ -53,9 +54,11 @@ std::vector<std::string> fields_needed(const InputFrame& f, const Params& p);
 // the missing-pass message of the first auto output left out ("" when none was).
 Params resolve_outputs(const InputFrame& f, const Params& p, std::string* why_dropped = nullptr);
 
-// Reads the given fields (all must be present). Checks the data: a depth that is not finite
-// or negative, or a non-finite normal or position, is Error(Exit::bad_data) naming the
-// frame, file, channel, pixel and value. Background (depth >= background_depth) is allowed.
+// Reads the given fields (all must be present). Checks the data: a value that is not
+// finite in any field, a negative depth, a value beyond +-1e9 in a normal, position or
+// colour pass (+-1000 in an albedo pass: DiffCol, GlossCol, TransCol) or a motion vector
+// beyond +-1e6 pixels is Error(Exit::bad_data) naming the frame, file, channel, pixel and
+// value. Background (depth >= background_depth) is allowed.
 // `keep_half`: the colour fields an OpenEXR file stores as half are kept as their bits in
 // GBuffer::packed (call GBuffer::unpack() before computing with them).
 GBuffer read_fields(const InputFrame& f, const std::vector<std::string>& fields, const Params& p,

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cstdint>
 #include <filesystem>
+#include <fstream>
 #include <sstream>
 
 #include "hbil/error.h"
@@ -99,6 +100,88 @@ void check_header_size(const std::string& path, const OIIO::ImageSpec& spec, boo
   std::error_code ec;
   const uintmax_t bytes = std::filesystem::file_size(path, ec);
   check_header_size(spec, openexr, ec ? 0 : size_t(bytes), where);
+}
+
+std::unique_ptr<OIIO::ImageInput> open_image_input(const std::string& path,
+                                                   const std::string& where) {
+  check_exr_attributes(path, where);
+  return OIIO::ImageInput::open(path);
+}
+
+namespace {
+
+// A channel list (OpenEXR "chlist"): per channel a name, the pixel type (int32: 0 uint,
+// 1 half, 2 float), pLinear and 3 reserved bytes, x and y sampling (int32), then an empty
+// name. OpenImageIO aborts the process on another pixel type, and a sampling below 1
+// divides by zero: both are refused here. Reads exactly `bytes` bytes of `in`.
+void check_channel_list(std::istream& in, int64_t bytes, const std::string& where) {
+  std::string list(size_t(bytes), '\0');
+  if (!in.read(list.data(), bytes)) return;
+  auto i32 = [&](size_t at) {
+    return int32_t(uint32_t(uint8_t(list[at])) | uint32_t(uint8_t(list[at + 1])) << 8 |
+                   uint32_t(uint8_t(list[at + 2])) << 16 | uint32_t(uint8_t(list[at + 3])) << 24);
+  };
+  for (size_t at = 0; at < list.size() && list[at] != '\0';) {
+    const size_t end = list.find('\0', at);
+    if (end == std::string::npos || end + 17 > list.size()) return;  // the reader's to report
+    const std::string name = list.substr(at, end - at);
+    const int32_t type = i32(end + 1), xs = i32(end + 9), ys = i32(end + 13);
+    if (type < 0 || type > 2)
+      throw Error(Exit::input, where + ": damaged OpenEXR header: channel \"" + name +
+                                   "\" has pixel type " + std::to_string(type) +
+                                   " (0 uint, 1 half and 2 float are defined)");
+    if (xs < 1 || ys < 1)
+      throw Error(Exit::input, where + ": damaged OpenEXR header: channel \"" + name +
+                                   "\" has sampling " + std::to_string(xs) + "x" +
+                                   std::to_string(ys) + " (at least 1x1)");
+    at = end + 17;
+  }
+}
+
+}  // namespace
+
+void check_exr_attributes(const std::string& path, const std::string& where) {
+  std::ifstream in(path, std::ios::binary);
+  unsigned char head[8];
+  if (!in.read(reinterpret_cast<char*>(head), 8)) return;
+  if (head[0] != 0x76 || head[1] != 0x2f || head[2] != 0x31 || head[3] != 0x01) return;
+  std::error_code ec;
+  const auto size = std::filesystem::file_size(path, ec);
+  if (ec) return;
+  const bool multipart = (head[5] & 0x10) != 0;  // version flags, bit 12
+  // A null-terminated name of at most 255 characters; false at the end of the file.
+  auto read_name = [&](std::string& name) {
+    name.clear();
+    for (char c; in.get(c);) {
+      if (c == 0) return true;
+      if (name.size() == 255) return false;
+      name += c;
+    }
+    return false;
+  };
+  std::string name, type;
+  for (;;) {
+    for (;;) {  // one header: attributes up to an empty name
+      if (!read_name(name)) return;
+      if (name.empty()) break;
+      unsigned char b[4];
+      if (!read_name(type) || !in.read(reinterpret_cast<char*>(b), 4)) return;
+      const int64_t claimed = int32_t(uint32_t(b[0]) | uint32_t(b[1]) << 8 | uint32_t(b[2]) << 16 |
+                                      uint32_t(b[3]) << 24);
+      const int64_t left = int64_t(size) - int64_t(in.tellg());
+      if (claimed < 0 || claimed > left)
+        throw Error(Exit::input, where + ": damaged OpenEXR header: attribute \"" + name + "\" (" +
+                                     type + ") claims " + std::to_string(claimed) + " bytes, " +
+                                     std::to_string(left) + " are left in the file");
+      if (type == "chlist") {
+        check_channel_list(in, claimed, where);
+      } else {
+        in.seekg(claimed, std::ios::cur);
+      }
+    }
+    // Single part: one header. Multi-part: headers until an empty one.
+    if (!multipart || in.peek() == 0 || !in) return;
+  }
 }
 
 }  // namespace hbil::io

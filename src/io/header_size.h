@@ -22,6 +22,7 @@
 #include <OpenImageIO/imageio.h>
 
 #include <cstddef>
+#include <memory>
 #include <string>
 
 namespace hbil::io {
@@ -44,5 +45,17 @@ void check_header_size(const OIIO::ImageSpec& spec, bool openexr, size_t file_by
 // The same for the file at `path` (its size read here).
 void check_header_size(const std::string& path, const OIIO::ImageSpec& spec, bool openexr,
                        const std::string& where);
+
+// OpenImageIO's ImageInput::open(path), after check_exr_attributes(path, where).
+std::unique_ptr<OIIO::ImageInput> open_image_input(const std::string& path,
+                                                   const std::string& where);
+
+// For an OpenEXR file (by its magic number; other files pass): walks its header(s) and
+// throws Error(Exit::input, "<where>: ...") when an attribute claims more bytes than the
+// file holds after it (OpenEXR sizes an attribute's buffer from that claim before reading
+// it, so a damaged 20 KB file could make it fill 2 GB), or a channel whose pixel type is
+// not uint, half or float (OpenImageIO aborts on one) or whose sampling is below 1. Other
+// damage is left to the reader.
+void check_exr_attributes(const std::string& path, const std::string& where);
 
 }  // namespace hbil::io

@@ -12,7 +12,7 @@
 namespace hbil::io {
 
 ImageFile::ImageFile(std::string path) : path_(std::move(path)) {
-  in_ = OIIO::ImageInput::open(path_);
+  in_ = open_image_input(path_, path_);
   if (!in_) throw Error(Exit::input, path_ + ": cannot read: " + OIIO::geterror());
   spec_ = in_->spec();
   check_header_size(path_, spec_, std::string(in_->format_name()) == "openexr", path_);

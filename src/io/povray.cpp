@@ -46,8 +46,8 @@ struct PassImage {
 
 PassImage read_pass(const std::string& path, int frame, const std::string& pass, int min_channels,
                     int width, int height) {
-  auto in = OIIO::ImageInput::open(path);
   const std::string where = "frame " + std::to_string(frame) + " (" + path + "), " + pass + " pass";
+  auto in = open_image_input(path, where);
   if (!in) throw Error(Exit::input, where + ": cannot read: " + OIIO::geterror());
   const OIIO::ImageSpec& spec = in->spec();
   check_header_size(path, spec, std::string(in->format_name()) == "openexr", where);

@@ -114,6 +114,7 @@ SequenceJob::SequenceJob(SequencePlan plan, const Params& requested) : plan_(std
     }
     const io::InputFrame shot_first =
         f0 == f ? first_ : io::open_frame(plan_.input.path(f0), f0, p_);
+    io::fields_needed(shot_first, p_);  // a frame with neither depth nor position: exit 4
     GBuffer g = io::read_fields(shot_first, {shot_first.has("depth") ? "depth" : "position"}, p_);
     const Camera cam = io::find_camera(shot_first, g, p_);
     scene_ = measure_scene(g, cam, p_);
