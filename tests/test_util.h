@@ -11,6 +11,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
@@ -23,6 +24,7 @@
 #include <string>
 #include <vector>
 
+#include "hbil/ao_frame.h"
 #include "hbil/error.h"
 
 namespace hbil::test {
@@ -66,6 +68,25 @@ void expect_same_bytes(const V& a, const V& b, const char* layer) {
   ASSERT_EQ(a.size(), b.size()) << layer;
   ASSERT_FALSE(a.empty()) << layer << " was not computed";
   EXPECT_EQ(0, std::memcmp(a.data(), b.data(), a.size() * sizeof(a[0]))) << layer;
+}
+
+// Two computed frames hold the same bytes in every layer either holds, and each layer of
+// `computed` (ao, ao_rgb, bent, cone_cos, irradiance, indirect, composite, farfield) was
+// computed.
+inline void expect_same_layers(const AoFrame& a, const AoFrame& b,
+                               std::initializer_list<std::string> computed) {
+  auto check = [&](const char* name, const auto& x, const auto& y) {
+    const bool wanted = std::find(computed.begin(), computed.end(), name) != computed.end();
+    if (wanted || !x.empty() || !y.empty()) expect_same_bytes(x, y, name);
+  };
+  check("ao", a.ao, b.ao);
+  check("ao_rgb", a.ao_rgb, b.ao_rgb);
+  check("bent", a.bent, b.bent);
+  check("cone_cos", a.cone_cos, b.cone_cos);
+  check("irradiance", a.irradiance, b.irradiance);
+  check("indirect", a.indirect, b.indirect);
+  check("composite", a.composite, b.composite);
+  check("farfield", a.farfield, b.farfield);
 }
 
 inline std::string test_name() {
