@@ -237,6 +237,19 @@ TEST(CameraSidecar, WrongTypesAndValuesAreNamed) {
   }
 }
 
+// Keys each valid whose combination is not a camera (found by tests/fuzz/fuzz_sidecar: a
+// sensor height of 2e-319 mm made the focal length infinite).
+TEST(CameraSidecar, ValidKeysThatGiveNoFiniteFocalLengthAreRefused) {
+  for (const auto& [key, value] : std::vector<std::pair<std::string, double>>{
+           {"sensor_width_mm", 2e-319}, {"lens_mm", 1e308}, {"shift_x", 1e308}}) {
+    json j = sidecar_json();
+    j[key] = value;
+    SCOPED_TRACE(key);
+    expect_error([&] { camera_from_sidecar_json(j, "cam.json"); }, Exit::camera,
+                 {"cam.json", "focal length of", "not a camera"});
+  }
+}
+
 TEST(CameraSidecar, UnsupportedTypesAreRefused) {
   for (const char* type : {"ORTHO", "PANO"}) {
     json j = sidecar_json();

@@ -679,6 +679,14 @@ Camera camera_from_sidecar_json(const json& j, const std::string& src) {
   cam.fy = cam.fx / ycor;
   cam.cx = 0.5 * W - shift_x * viewfac;
   cam.cy = 0.5 * H + shift_y * viewfac / ycor;
+  // Each key can be valid and their quotient not (a sensor of 1e-320 mm).
+  if (!(std::isfinite(cam.fx) && std::isfinite(cam.fy) && cam.fx > 0 && cam.fy > 0 &&
+        std::isfinite(cam.cx) && std::isfinite(cam.cy)))
+    camera_file_error(src,
+                      "lens_mm, the sensor size, pixel_aspect and the shifts give a focal "
+                      "length of " +
+                          fmt(cam.fx) + " x " + fmt(cam.fy) + " pixels and a principal point at (" +
+                          fmt(cam.cx) + ", " + fmt(cam.cy) + "): not a camera");
   cam.source = "sidecar " + std::filesystem::path(src).filename().string();
   return cam;
 }
