@@ -110,6 +110,12 @@ std::unique_ptr<OIIO::ImageInput> open_image_input(const std::string& path,
 
 namespace {
 
+// The little-endian int32 at p (OpenEXR's byte order).
+int32_t le_int32(const char* p) {
+  const auto b = [p](int k) { return uint32_t(uint8_t(p[k])); };
+  return int32_t(b(0) | b(1) << 8 | b(2) << 16 | b(3) << 24);
+}
+
 // A channel list (OpenEXR "chlist"): per channel a name, the pixel type (int32: 0 uint,
 // 1 half, 2 float), pLinear and 3 reserved bytes, x and y sampling (int32), then an empty
 // name. OpenImageIO aborts the process on another pixel type, and a sampling below 1
@@ -117,15 +123,12 @@ namespace {
 void check_channel_list(std::istream& in, int64_t bytes, const std::string& where) {
   std::string list(size_t(bytes), '\0');
   if (!in.read(list.data(), bytes)) return;
-  auto i32 = [&](size_t at) {
-    return int32_t(uint32_t(uint8_t(list[at])) | uint32_t(uint8_t(list[at + 1])) << 8 |
-                   uint32_t(uint8_t(list[at + 2])) << 16 | uint32_t(uint8_t(list[at + 3])) << 24);
-  };
   for (size_t at = 0; at < list.size() && list[at] != '\0';) {
     const size_t end = list.find('\0', at);
     if (end == std::string::npos || end + 17 > list.size()) return;  // the reader's to report
     const std::string name = list.substr(at, end - at);
-    const int32_t type = i32(end + 1), xs = i32(end + 9), ys = i32(end + 13);
+    const int32_t type = le_int32(&list[end + 1]), xs = le_int32(&list[end + 9]),
+                  ys = le_int32(&list[end + 13]);
     if (type < 0 || type > 2)
       throw Error(Exit::input, where + ": damaged OpenEXR header: channel \"" + name +
                                    "\" has pixel type " + std::to_string(type) +
@@ -164,10 +167,9 @@ void check_exr_attributes(const std::string& path, const std::string& where) {
     for (;;) {  // one header: attributes up to an empty name
       if (!read_name(name)) return;
       if (name.empty()) break;
-      unsigned char b[4];
-      if (!read_name(type) || !in.read(reinterpret_cast<char*>(b), 4)) return;
-      const int64_t claimed = int32_t(uint32_t(b[0]) | uint32_t(b[1]) << 8 | uint32_t(b[2]) << 16 |
-                                      uint32_t(b[3]) << 24);
+      char b[4];
+      if (!read_name(type) || !in.read(b, 4)) return;
+      const int64_t claimed = le_int32(b);
       const int64_t left = int64_t(size) - int64_t(in.tellg());
       if (claimed < 0 || claimed > left)
         throw Error(Exit::input, where + ": damaged OpenEXR header: attribute \"" + name + "\" (" +
