@@ -591,6 +591,49 @@ TEST(ExrLayouts, TiledFileGivesTheScanlineTwinsPixels) {
   }
 }
 
+// A tiled, mip-mapped twin (levels down to 1x1, the lower ones filled with another value,
+// as a texture pipeline writes): its top level is read, with the original's pixels.
+TEST(ExrLayouts, MipMappedFileIsReadFromItsTopLevel) {
+  TempDir dir{test::test_name()};
+  const std::string src = test::kRoomPoles + "/frame_0001.exr";
+  const std::string mip = dir / "mip.exr";
+  {
+    auto in = OIIO::ImageInput::open(src);
+    ASSERT_TRUE(in) << OIIO::geterror();
+    OIIO::ImageSpec spec = in->spec();
+    std::vector<unsigned char> native(spec.image_bytes(true));
+    ASSERT_TRUE(in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeUnknown, native.data()));
+    spec.tile_width = spec.tile_height = 32;
+    spec.tile_depth = 1;
+    spec.attribute("textureformat", "Plain Texture");  // what makes the EXR writer keep levels
+    spec.attribute("openexr:levelmode", 1);            // MIPMAP_LEVELS
+    auto out = OIIO::ImageOutput::create(mip);
+    ASSERT_TRUE(out && out->supports("mipmap"));
+    ASSERT_TRUE(out->open(mip, spec, OIIO::ImageOutput::Create)) << out->geterror();
+    ASSERT_TRUE(out->write_image(OIIO::TypeUnknown, native.data())) << out->geterror();
+    int levels = 1;
+    for (int w = spec.width, h = spec.height; w > 1 || h > 1; ++levels) {
+      w = std::max(1, w / 2), h = std::max(1, h / 2);
+      OIIO::ImageSpec level = spec;
+      level.width = level.full_width = w;
+      level.height = level.full_height = h;
+      const std::vector<float> fill(size_t(w) * h * spec.nchannels, 0.125f);
+      ASSERT_TRUE(out->open(mip, level, OIIO::ImageOutput::AppendMIPLevel)) << out->geterror();
+      ASSERT_TRUE(out->write_image(OIIO::TypeDesc::FLOAT, fill.data())) << out->geterror();
+    }
+    ASSERT_TRUE(out->close());
+    EXPECT_EQ(levels, 9);  // 256x144 down to 1x1
+    auto back = OIIO::ImageInput::open(mip);
+    ASSERT_TRUE(back && back->seek_subimage(0, levels - 1)) << "not mip-mapped";
+    EXPECT_EQ(back->spec().width, 1);
+  }
+  Params p;
+  const InputFrame a = open_frame(src, 1, p), b = open_frame(mip, 1, p);
+  EXPECT_EQ(b.spec.width, a.spec.width);
+  const std::vector<std::string> need = fields_needed(a, p);
+  expect_same_fields(read_fields(a, need, p), read_fields(b, need, p));
+}
+
 // A multi-part file whose first part is a beauty image (Combined RGBA alone), as compositing
 // packages write them, and whose second holds the passes: the second is read, with the
 // pixels of the single-part original, through both the float and the half-keeping read.
