@@ -2,9 +2,11 @@
 #include "io/header_size.h"
 
 #include <algorithm>
+#include <climits>
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <sstream>
 
 #include "hbil/error.h"
@@ -116,13 +118,21 @@ int32_t le_int32(const char* p) {
   return int32_t(b(0) | b(1) << 8 | b(2) << 16 | b(3) << 24);
 }
 
+// What the size check needs of one OpenEXR header, from its attributes.
+struct ExrHeaderFacts {
+  bool window = false;
+  int64_t width = 0, height = 0;  // dataWindow
+  std::vector<OIIO::TypeDesc> formats;
+  std::string compression = "none";
+  int tile_width = 0, tile_height = 0;
+};
+
 // A channel list (OpenEXR "chlist"): per channel a name, the pixel type (int32: 0 uint,
 // 1 half, 2 float), pLinear and 3 reserved bytes, x and y sampling (int32), then an empty
 // name. OpenImageIO aborts the process on another pixel type, and a sampling below 1
-// divides by zero: both are refused here. Reads exactly `bytes` bytes of `in`.
-void check_channel_list(std::istream& in, int64_t bytes, const std::string& where) {
-  std::string list(size_t(bytes), '\0');
-  if (!in.read(list.data(), bytes)) return;
+// divides by zero: both are refused here.
+void read_channel_list(const std::string& list, ExrHeaderFacts& facts, const std::string& where) {
+  facts.formats.clear();  // of two lists, the last counts (as in OpenEXR)
   for (size_t at = 0; at < list.size() && list[at] != '\0';) {
     const size_t end = list.find('\0', at);
     if (end == std::string::npos || end + 17 > list.size()) return;  // the reader's to report
@@ -137,8 +147,47 @@ void check_channel_list(std::istream& in, int64_t bytes, const std::string& wher
       throw Error(Exit::input, where + ": damaged OpenEXR header: channel \"" + name +
                                    "\" has sampling " + std::to_string(xs) + "x" +
                                    std::to_string(ys) + " (at least 1x1)");
+    facts.formats.push_back(type == 1   ? OIIO::TypeDesc::HALF
+                            : type == 2 ? OIIO::TypeDesc::FLOAT
+                                        : OIIO::TypeDesc::UINT32);
     at = end + 17;
   }
+}
+
+// Takes the attributes the size check needs from their value bytes.
+void note_attribute(const std::string& name, const std::string& type, const std::string& value,
+                    ExrHeaderFacts& facts, const std::string& where) {
+  static const char* const kCompressions[] = {"none",  "rle", "zips", "zip",  "piz",
+                                              "pxr24", "b44", "b44a", "dwaa", "dwab"};
+  if (type == "chlist") {
+    read_channel_list(value, facts, where);
+  } else if (name == "dataWindow" && type == "box2i" && value.size() == 16) {
+    facts.window = true;
+    facts.width = int64_t(le_int32(&value[8])) - le_int32(&value[0]) + 1;
+    facts.height = int64_t(le_int32(&value[12])) - le_int32(&value[4]) + 1;
+  } else if (name == "compression" && type == "compression" && value.size() == 1) {
+    const unsigned c = uint8_t(value[0]);
+    facts.compression = c < std::size(kCompressions) ? kCompressions[c] : "unknown";
+  } else if (name == "tiles" && type == "tiledesc" && value.size() == 9) {
+    facts.tile_width = std::max(0, le_int32(&value[0]));
+    facts.tile_height = std::max(0, le_int32(&value[4]));
+  }
+}
+
+// check_header_size() on what the attributes of one header claim, before any library sizes
+// a buffer from them.
+void check_facts(const ExrHeaderFacts& facts, size_t file_bytes, const std::string& where) {
+  if (!facts.window || facts.width <= 0 || facts.height <= 0) return;  // the reader's to report
+  if (facts.width > INT32_MAX || facts.height > INT32_MAX)
+    throw Error(Exit::input, where + ": the header claims " + std::to_string(facts.width) + "x" +
+                                 std::to_string(facts.height) + " pixels: the header is damaged");
+  OIIO::ImageSpec spec(int(facts.width), int(facts.height), int(facts.formats.size()),
+                       OIIO::TypeDesc::HALF);
+  spec.channelformats = facts.formats;
+  spec.tile_width = facts.tile_width;
+  spec.tile_height = facts.tile_height;
+  spec.attribute("compression", facts.compression);
+  check_header_size(spec, true, file_bytes, where);
 }
 
 }  // namespace
@@ -162,8 +211,9 @@ void check_exr_attributes(const std::string& path, const std::string& where) {
     }
     return false;
   };
-  std::string name, type;
+  std::string name, type, value;
   for (;;) {
+    ExrHeaderFacts facts;
     for (;;) {  // one header: attributes up to an empty name
       if (!read_name(name)) return;
       if (name.empty()) break;
@@ -175,12 +225,15 @@ void check_exr_attributes(const std::string& path, const std::string& where) {
         throw Error(Exit::input, where + ": damaged OpenEXR header: attribute \"" + name + "\" (" +
                                      type + ") claims " + std::to_string(claimed) + " bytes, " +
                                      std::to_string(left) + " are left in the file");
-      if (type == "chlist") {
-        check_channel_list(in, claimed, where);
+      if (type == "chlist" || type == "box2i" || type == "compression" || type == "tiledesc") {
+        value.resize(size_t(claimed));
+        if (!in.read(value.data(), claimed)) return;
+        note_attribute(name, type, value, facts, where);
       } else {
         in.seekg(claimed, std::ios::cur);
       }
     }
+    check_facts(facts, size_t(size), where);
     // Single part: one header. Multi-part: headers until an empty one.
     if (!multipart || in.peek() == 0 || !in) return;
   }

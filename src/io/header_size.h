@@ -54,8 +54,10 @@ std::unique_ptr<OIIO::ImageInput> open_image_input(const std::string& path,
 // throws Error(Exit::input, "<where>: ...") when an attribute claims more bytes than the
 // file holds after it (OpenEXR sizes an attribute's buffer from that claim before reading
 // it, so a damaged 20 KB file could make it fill 2 GB), or a channel whose pixel type is
-// not uint, half or float (OpenImageIO aborts on one) or whose sampling is below 1. Other
-// damage is left to the reader.
+// not uint, half or float (OpenImageIO aborts on one) or whose sampling is below 1; and runs
+// check_header_size() on each header's dataWindow, channels, compression and tiles, since
+// OpenEXR sizes its line buffers from them when the file is opened. Other damage is left to
+// the reader.
 void check_exr_attributes(const std::string& path, const std::string& where);
 
 }  // namespace hbil::io
