@@ -275,6 +275,10 @@ TEST(Params, ApplySetErrorsNameTheAssignment) {
   expect_error([&] { apply_set(p, "outputs=[\"ao\",\"composit\xce\"]"); }, Exit::preset,
                {"not valid UTF-8"});
   expect_error([&] { apply_set(p, "view_layer=Vi\xe9w"); }, Exit::preset, {"not valid UTF-8"});
+  // Found by tests/fuzz/fuzz_preset: every dot nested the value once more, at a cost growing
+  // with the square of the dots.
+  expect_error([&] { apply_set(p, "passes.depth.x=Depth"); }, Exit::preset,
+               {"unknown key 'passes.depth.x'", "at most one dot"});
 }
 
 // A preset file is refused with exit 7 naming it, whatever is wrong with its JSON. Found by

@@ -368,6 +368,9 @@ Params apply_set(const Params& p, const std::string& assignment) {
   json value = json::parse(text, nullptr, /*allow_exceptions=*/false);
   if (value.is_discarded()) value = text;  // bare words are strings: passes.depth=Depth
   // A dotted key reaches into an object: "passes.depth" -> {"passes": {"depth": value}}.
+  // No key is deeper than that.
+  if (std::count(key.begin(), key.end(), '.') > 1)
+    fail(where, "unknown key '" + key + "' (a key has at most one dot, as in passes.depth)");
   json patch = value;
   for (size_t dot = key.rfind('.'); dot != std::string::npos; dot = key.rfind('.')) {
     patch = json{{key.substr(dot + 1), patch}};
