@@ -274,14 +274,11 @@ std::string write_display_temporary(const std::string& final_path, const std::ve
         px[0] *= k, px[1] *= k, px[2] *= k;
       }
     t.apply(buf, width, rows, tc);
-    if (tc == 4 && fc == 4 && !exr) {
-      // PNG: straight colour and alpha as they are.
-    } else if (tc == 4) {
-      for (size_t i = 0; i < n; ++i) {  // EXR premultiplied again; JPEG over black
+    if (tc == 4 && (exr || jpeg))  // EXR premultiplied again, JPEG over black; PNG straight
+      for (size_t i = 0; i < n; ++i) {
         float* px = &buf[4 * i];
         px[0] *= px[3], px[1] *= px[3], px[2] *= px[3];
       }
-    }
     if (exr) {
       ok = out->write_scanlines(y0, y0 + rows, 0, OIIO::TypeDesc::FLOAT, buf.data());
       continue;
