@@ -37,11 +37,12 @@ for t in "${targets[@]}"; do
   args=(-max_total_time="$seconds" -timeout=10 -rss_limit_mb=3072 -malloc_limit_mb=2048
     -dict="$dict" -print_final_stats=1 -artifact_prefix="$B/findings/$t/")
   if ((jobs > 1)); then
-    # -jobs writes one log per job (fuzz-<n>.log in the current folder): run them in $B.
+    # -jobs writes one log per job (fuzz-<n>.log in the current folder, so run in $B); the
+    # parent's output repeats each, so they are removed, not appended.
     (cd "$B" && ASAN_OPTIONS=detect_leaks=1:quarantine_size_mb=64 "$bin" "${args[@]}" \
       -jobs="$jobs" -workers="$jobs" "$work" >"$log" 2>&1)
     rc=$?
-    cat "$B"/fuzz-[0-9]*.log >>"$log" 2>/dev/null && rm -f "$B"/fuzz-[0-9]*.log
+    rm -f "$B"/fuzz-[0-9]*.log
   else
     ASAN_OPTIONS=detect_leaks=1:quarantine_size_mb=64 "$bin" "${args[@]}" "$work" >"$log" 2>&1
     rc=$?
