@@ -534,13 +534,21 @@ TEST_F(ExrFrame, CameraSolvedFromPositionWithoutSidecar) {
   EXPECT_NEAR(c.z, rc.z, 0.01);
 }
 
+// The spec and native pixel bytes (every channel in its own format) of the image at `path`.
+void read_native(const std::string& path, OIIO::ImageSpec& spec,
+                 std::vector<unsigned char>& native) {
+  auto in = OIIO::ImageInput::open(path);
+  ASSERT_TRUE(in) << OIIO::geterror();
+  spec = in->spec();
+  native.resize(spec.image_bytes(true));
+  ASSERT_TRUE(in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeUnknown, native.data()));
+}
+
 // Writes `src` again with tiles of `tile` x `tile` pixels, every channel in its own format.
 void write_tiled(const std::string& src, const std::string& dst, int tile) {
-  auto in = OIIO::ImageInput::open(src);
-  ASSERT_TRUE(in) << OIIO::geterror();
-  OIIO::ImageSpec spec = in->spec();
-  std::vector<unsigned char> native(spec.image_bytes(true));
-  ASSERT_TRUE(in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeUnknown, native.data()));
+  OIIO::ImageSpec spec;
+  std::vector<unsigned char> native;
+  ASSERT_NO_FATAL_FAILURE(read_native(src, spec, native));
   spec.tile_width = spec.tile_height = tile;
   spec.tile_depth = 1;
   auto out = OIIO::ImageOutput::create(dst);
@@ -598,11 +606,9 @@ TEST(ExrLayouts, MipMappedFileIsReadFromItsTopLevel) {
   const std::string src = test::kRoomPoles + "/frame_0001.exr";
   const std::string mip = dir / "mip.exr";
   {
-    auto in = OIIO::ImageInput::open(src);
-    ASSERT_TRUE(in) << OIIO::geterror();
-    OIIO::ImageSpec spec = in->spec();
-    std::vector<unsigned char> native(spec.image_bytes(true));
-    ASSERT_TRUE(in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeUnknown, native.data()));
+    OIIO::ImageSpec spec;
+    std::vector<unsigned char> native;
+    ASSERT_NO_FATAL_FAILURE(read_native(src, spec, native));
     spec.tile_width = spec.tile_height = 32;
     spec.tile_depth = 1;
     spec.attribute("textureformat", "Plain Texture");  // what makes the EXR writer keep levels
@@ -642,11 +648,9 @@ TEST(ExrLayouts, MultiPartFileIsReadFromThePartHoldingThePasses) {
   const std::string src = test::kRoomPoles + "/frame_0001.exr";
   const std::string multi = dir / "multipart.exr";
   {
-    auto in = OIIO::ImageInput::open(src);
-    ASSERT_TRUE(in) << OIIO::geterror();
-    const OIIO::ImageSpec passes = in->spec();
-    std::vector<unsigned char> native(passes.image_bytes(true));
-    ASSERT_TRUE(in->read_image(0, 0, 0, passes.nchannels, OIIO::TypeUnknown, native.data()));
+    OIIO::ImageSpec passes;
+    std::vector<unsigned char> native;
+    ASSERT_NO_FATAL_FAILURE(read_native(src, passes, native));
     OIIO::ImageSpec beauty(passes.width, passes.height, 4, OIIO::TypeDesc::HALF);
     beauty.channelnames = {"R", "G", "B", "A"};
     beauty.alpha_channel = 3;
