@@ -73,7 +73,6 @@ void convert(const Bytes& bytes, size_t line_bytes, size_t width, size_t row0, s
     for (const Plan& p : plans) {
       const int size = p.type == Imf::HALF ? 2 : 4;
       const size_t j0 = r * line_bytes + p.offset;
-      float* out = p.target->dst + (row0 + r) * width * p.target->stride;
       const size_t stride = p.target->stride;
       if (p.target->half) {  // a HALF channel kept as its bits
         std::uint16_t* bits = p.target->half + (row0 + r) * width * stride;
@@ -85,7 +84,10 @@ void convert(const Bytes& bytes, size_t line_bytes, size_t width, size_t row0, s
           for (size_t x = 0; x < width; ++x)
             bits[x * stride] = std::uint16_t(bytes.sample(j0 + x * 2, 2));
         }
-      } else if (bytes.split && p.type == Imf::HALF) {  // the common case, unrolled
+        continue;
+      }
+      float* out = p.target->dst + (row0 + r) * width * stride;  // no float target when kept
+      if (bytes.split && p.type == Imf::HALF) {                  // the common case, unrolled
         const unsigned char* lo = bytes.lo + j0 / 2;
         const unsigned char* hi = bytes.hi + j0 / 2;
         for (size_t x = 0; x < width; ++x) {

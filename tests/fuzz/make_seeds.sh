@@ -4,8 +4,8 @@
 # from it; rerun it only to change them.
 #
 #   frame/    16x9 subsamples of samples/room_poles/frame_0001.exr in the layouts the reader
-#             takes: ZIP scanlines as Blender writes, RLE, PIZ, ZIPS, none, DWAA, B44, all
-#             half, tiled, multi-part, and only the fields AO needs; with the camera in the
+#             takes: ZIP scanlines as Blender writes, RLE, PIZ, ZIPS, none, DWAA, B44, half
+#             (depth float), tiled, multi-part, and only the fields AO needs; with the camera in the
 #             header (worldToCamera, worldToNDC) or left to be solved from Position.
 #   sidecar/  the samples' camera sidecars and tests/data/camera's.
 #   preset/   presets/*.json and a few --set assignments.
@@ -40,8 +40,11 @@ oiiotool "$small" "${cam[@]}" --compression piz -o "$F/piz.exr"
 oiiotool "$small" "${cam[@]}" --compression zips -o "$F/zips.exr"
 oiiotool "$small" "${cam[@]}" --compression none -o "$F/none.exr"
 oiiotool "$small" "${cam[@]}" --compression dwaa -o "$F/dwaa.exr"
-oiiotool "$small" "${cam[@]}" --compression b44 -d half -o "$F/b44_half.exr"
-oiiotool "$small" "${cam[@]}" -d half --compression zip -o "$F/half.exr"
+# Half, but depth float: half overflows at the background's depth, and the frame would stop
+# at its first pixel.
+depth_float=(-d ViewLayer.Depth.Z=float -d BackFaces.Depth.Z=float)
+oiiotool "$small" "${cam[@]}" --compression b44 -d half "${depth_float[@]}" -o "$F/b44_half.exr"
+oiiotool "$small" "${cam[@]}" -d half "${depth_float[@]}" --compression zip -o "$F/half.exr"
 oiiotool "$small" "${cam[@]}" --tile 8 8 --compression zip -o "$F/tiled.exr"
 oiiotool "$small" "${cam[@]}" --ch "ViewLayer.Depth.Z,ViewLayer.Normal.X,ViewLayer.Normal.Y,ViewLayer.Normal.Z" \
   --compression zip -o "$F/ao_only.exr"

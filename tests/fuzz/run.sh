@@ -15,6 +15,12 @@
 # build-fuzz/findings/<target>/, the log names it, and run.sh exits 1.
 #
 # The long campaign: JOBS=2 tests/fuzz/run.sh 3600 (an hour per target on 2 cores).
+#
+# A repeatable run (what CI does): RUNS=N stops each target after N executions, SEED=S
+# (default 1) fixes libFuzzer's random choices, and CORPUS=DIR puts the working corpora in
+# DIR/<target>/ instead (a fresh DIR starts from the committed seeds alone). With one job,
+# the same build then makes the same inputs in the same order, so a run that passed here
+# passes there; SECONDS still bounds it.
 # Replaying one input: build-fuzz/tests/fuzz/fuzz_<target> FILE.
 set -uo pipefail
 cd "$(dirname "$0")/../.."
@@ -30,12 +36,13 @@ for t in "${targets[@]}"; do
   [ -x "$bin" ] || { echo "run.sh: $bin not built (cmake --preset fuzz && cmake --build --preset fuzz)" >&2; exit 2; }
   dict=$PWD/tests/fuzz/json.dict
   case $t in frame | povray) dict=$PWD/tests/fuzz/exr.dict ;; esac
-  work=$B/corpus/$t
+  work=${CORPUS:-$B/corpus}/$t
   mkdir -p "$work" "$B/findings/$t"
   cp -n tests/fuzz/corpus/$t/* "$work/"
   log=$B/fuzz-$t.log
   args=(-max_total_time="$seconds" -timeout=10 -rss_limit_mb=3072 -malloc_limit_mb=2048
     -dict="$dict" -print_final_stats=1 -artifact_prefix="$B/findings/$t/")
+  [ -n "${RUNS:-}" ] && args+=(-runs="$RUNS" -seed="${SEED:-1}")
   if ((jobs > 1)); then
     # -jobs writes one log per job (fuzz-<n>.log in the current folder, so run in $B); the
     # parent's output repeats each, so they are removed, not appended.
@@ -52,12 +59,13 @@ for t in "${targets[@]}"; do
   cov=$(sed -n 's/.* cov: \([0-9]*\).*/\1/p' <<<"$last")
   ft=$(sed -n 's/.* ft: \([0-9]*\).*/\1/p' <<<"$last")
   n=$(find "$work" -type f | wc -l)
+  took=$(sed -n 's/^Done [0-9]* runs in \([0-9]*\) second.*/\1/p' "$log" | tail -1)
   if ((rc != 0)); then
     status=1
     echo "fuzz_$t: FINDING (exit $rc) after $execs executions; see $log"
     grep -hE 'ERROR|SUMMARY|Test unit written|fuzz_[a-z]*:' "$log" | head -8
   else
-    echo "fuzz_$t: $execs executions in ${seconds} s, ${cov:-?} edges, ${ft:-?} features, $n inputs in the corpus"
+    echo "fuzz_$t: $execs executions in ${took:-$seconds} s, ${cov:-?} edges, ${ft:-?} features, $n inputs in the corpus"
   fi
 done
 exit $status
