@@ -237,6 +237,38 @@ TEST_F(ExrFrame, InfiniteNormalIsBadData) {
                {"frame 11", path, "ViewLayer.Normal.Y", "pixel (0, 1)", "inf"});
 }
 
+// A channel list that does not end within its attribute's size: OpenEXR reads on into the
+// next attribute and took a pixel type of 3 from there, on which OpenImageIO aborted (found
+// by tests/fuzz/fuzz_frame). Refused, exit 3, whether the list's end or its last channel
+// lies beyond the size.
+TEST(ExrLayouts, ChannelListBeyondItsSizeIsRefusedBeforeReading) {
+  TempDir dir{test::test_name()};
+  std::ifstream in(test::kRoomPoles + "/frame_0001.exr", std::ios::binary);
+  const std::string good((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const size_t size_at = good.find(std::string("channels\0chlist\0", 16)) + 16;
+  ASSERT_LT(size_at, good.size());
+  const uint32_t size = uint32_t(uint8_t(good[size_at])) |
+                        uint32_t(uint8_t(good[size_at + 1])) << 8 |
+                        uint32_t(uint8_t(good[size_at + 2])) << 16;
+  struct Case {
+    uint32_t shorter;
+    const char* message;
+  } cases[] = {
+      {1, "the channel list has no end within its size"},
+      {5,
+       "the channel list ends inside channel \"ViewLayer.Vector.Z\""}};  // the last, alphabetically
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.message);
+    std::string bytes = good;
+    const uint32_t v = size - c.shorter;
+    for (int b = 0; b < 4; ++b) bytes[size_at + b] = char((v >> (8 * b)) & 0xff);
+    const std::string damaged = dir / "damaged.exr";
+    std::ofstream(damaged, std::ios::binary | std::ios::trunc) << bytes;
+    expect_error([&] { open_frame(damaged, 1, Params{}); }, Exit::input,
+                 {damaged, "damaged OpenEXR header", c.message});
+  }
+}
+
 // A channel of an undefined pixel type made OpenImageIO abort the process (found by
 // tests/fuzz/fuzz_frame), and a sampling of 0 would divide by zero: both refused, exit 3.
 TEST(ExrLayouts, UndefinedPixelTypeOrSamplingIsRefusedBeforeReading) {
@@ -266,7 +298,7 @@ TEST(ExrLayouts, UndefinedPixelTypeOrSamplingIsRefusedBeforeReading) {
 // Finite values no render writes, whose products would overflow float in the gather and
 // reach the output as Inf (found by tests/fuzz/fuzz_frame: -1.7e38 in every pass): refused
 // like non-finite ones, at the bound and not below it.
-TEST_F(ExrFrame, ColourAndMotionBeyondTheirBoundsAreBadData) {
+TEST_F(ExrFrame, ColourMotionAndAlphaBeyondTheirBoundsAreBadData) {
   auto channels = blender_channels("ViewLayer");
   for (const char* c : {"DiffCol.R", "DiffCol.G", "DiffCol.B", "Emit.R", "Emit.G", "Emit.B",
                         "Vector.X", "Vector.Y", "Vector.Z", "Vector.W"})
@@ -281,7 +313,11 @@ TEST_F(ExrFrame, ColourAndMotionBeyondTheirBoundsAreBadData) {
                {"ViewLayer.Emit.B", 1e9f, false, ""},
                {"ViewLayer.Emit.B", -2e9f, true, "emit beyond +-1e9"},
                {"ViewLayer.Vector.X", -1e6f, false, ""},
-               {"ViewLayer.Vector.Y", 3e6f, true, "vector beyond +-1e6 pixels"}};
+               {"ViewLayer.Vector.Y", 3e6f, true, "vector beyond +-1e6 pixels"},
+               // The composite's alpha (a NaN there reached the output; found by fuzz_frame).
+               {"ViewLayer.Combined.A", -1e9f, false, ""},
+               {"ViewLayer.Combined.A", std::nanf(""), true, "non-finite alpha"},
+               {"ViewLayer.Combined.A", 2e9f, true, "alpha beyond +-1e9"}};
   Params p;
   p.outputs = {"ao", "composite"};
   p.passes["emit"] = "Emit";
@@ -295,7 +331,7 @@ TEST_F(ExrFrame, ColourAndMotionBeyondTheirBoundsAreBadData) {
       return value_for(channels[ch], x, y);
     });
     const InputFrame f = open_frame(path, 1, p);
-    std::vector<std::string> fields = {"depth", "normal", "diffcol", "emit", "vector"};
+    std::vector<std::string> fields = {"depth", "normal", "diffcol", "emit", "vector", "alpha"};
     if (c.refused)
       expect_error([&] { read_fields(f, fields, p); }, Exit::bad_data,
                    {path, c.channel, c.why, "pixel (2, 7)"});

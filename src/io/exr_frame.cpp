@@ -390,7 +390,12 @@ GBuffer read_fields(const InputFrame& f, const std::vector<std::string>& fields,
         if (v[i] < 0) bad_value(f, idx[0], i, v[i], "negative " + field);
       }
     } else if (field == "alpha") {
-      // any value is taken: only alpha > 0 matters (gbuffer.h)
+      // Any finite value is taken (only alpha > 0 matters, gbuffer.h); it becomes the
+      // composite's alpha, so a NaN or an infinity would reach the output.
+      for (size_t i = 0; i < count; ++i) {
+        if (!std::isfinite(v[i])) bad_value(f, idx[0], i, v[i], "non-finite alpha");
+        if (std::abs(v[i]) > kMaxColour) bad_value(f, idx[0], i, v[i], "alpha beyond +-1e9");
+      }
     } else if (field == "vector") {
       // Blender: the previous-frame position of pixel (col, row), rows top-down, is
       // (col + X, row − Y) (samples/README.md); stored as the raster offset (X, −Y).

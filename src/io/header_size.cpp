@@ -130,12 +130,18 @@ struct ExrHeaderFacts {
 // A channel list (OpenEXR "chlist"): per channel a name, the pixel type (int32: 0 uint,
 // 1 half, 2 float), pLinear and 3 reserved bytes, x and y sampling (int32), then an empty
 // name. OpenImageIO aborts the process on another pixel type, and a sampling below 1
-// divides by zero: both are refused here.
+// divides by zero: both are refused here. So is a list that does not end within the
+// attribute's size: OpenEXR reads on into the next attribute's bytes, and takes its pixel
+// types from there.
 void read_channel_list(const std::string& list, ExrHeaderFacts& facts, const std::string& where) {
   facts.formats.clear();  // of two lists, the last counts (as in OpenEXR)
-  for (size_t at = 0; at < list.size() && list[at] != '\0';) {
+  size_t at = 0;
+  for (; at < list.size() && list[at] != '\0';) {
     const size_t end = list.find('\0', at);
-    if (end == std::string::npos || end + 17 > list.size()) return;  // the reader's to report
+    if (end == std::string::npos || end + 17 > list.size())
+      throw Error(Exit::input,
+                  where + ": damaged OpenEXR header: the channel list ends inside channel \"" +
+                      list.substr(at, std::min(end, list.size()) - at) + "\"");
     const std::string name = list.substr(at, end - at);
     const int32_t type = le_int32(&list[end + 1]), xs = le_int32(&list[end + 9]),
                   ys = le_int32(&list[end + 13]);
@@ -152,6 +158,9 @@ void read_channel_list(const std::string& list, ExrHeaderFacts& facts, const std
                                         : OIIO::TypeDesc::UINT32);
     at = end + 17;
   }
+  if (at >= list.size())
+    throw Error(Exit::input,
+                where + ": damaged OpenEXR header: the channel list has no end within its size");
 }
 
 // Takes the attributes the size check needs from their value bytes.

@@ -16,7 +16,8 @@
 #
 # The long campaign: JOBS=2 tests/fuzz/run.sh 3600 (an hour per target on 2 cores).
 #
-# A repeatable run (what CI does): RUNS=N stops each target after N executions, SEED=S
+# A repeatable run (what CI does): RUNS=N stops each target after N executions (each job
+# after N with JOBS), SEED=S
 # (default 1) fixes libFuzzer's random choices, and CORPUS=DIR puts the working corpora in
 # DIR/<target>/ instead (a fresh DIR starts from the committed seeds alone). With one job,
 # the same build then makes the same inputs in the same order, so a run that passed here
@@ -42,7 +43,9 @@ for t in "${targets[@]}"; do
   log=$B/fuzz-$t.log
   args=(-max_total_time="$seconds" -timeout=10 -rss_limit_mb=3072 -malloc_limit_mb=2048
     -dict="$dict" -print_final_stats=1 -artifact_prefix="$B/findings/$t/")
-  [ -n "${RUNS:-}" ] && args+=(-runs="$RUNS" -seed="${SEED:-1}")
+  # RUNS is per job; each job of several takes a seed of its own.
+  [ -n "${RUNS:-}" ] && args+=(-runs="$RUNS")
+  [ -n "${RUNS:-}" ] && ((jobs == 1)) && args+=(-seed="${SEED:-1}")
   if ((jobs > 1)); then
     # -jobs writes one log per job (fuzz-<n>.log in the current folder, so run in $B); the
     # parent's output repeats each, so they are removed, not appended.
