@@ -3,13 +3,18 @@
 //
 // Each test works in its own temporary folder and runs HBIL_BINARY on the room_poles
 // sample (256x144, two frames take well under a second) or on copies of it with a pass
-// removed or a pixel broken. A failing run must leave its output folder exactly as it was:
-// every failure test puts a sentinel out_0001.exr there first and compares the folder
-// byte for byte afterwards.
+// removed or a pixel broken. A failing run keeps the frames it finished before the failure
+// and leaves everything else in its output folder exactly as it was: every failure test puts
+// sentinels out_0001.exr and out_0002.exr there first and compares the folder byte for byte
+// afterwards, less the frames the failure kept.
 
 #include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -20,6 +25,7 @@
 #include <regex>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "hbil/error.h"
@@ -98,18 +104,34 @@ class Cli : public ::testing::Test {
     return path("in") + sample(n, ext).substr(test::kRoomPoles.size());
   }
 
-  // Puts a sentinel out_0001.exr into out/, runs, and checks the exit code, that stderr
-  // holds every needle, and that out/ is byte-identical afterwards (no output, no
-  // temporaries).
+  // Puts sentinels out_0001.exr and out_0002.exr into out/, runs, and checks the exit code,
+  // that stderr holds every needle, and that out/ is byte-identical afterwards (no output,
+  // no temporaries) but for the frames `kept`: those were finished before the failure, and
+  // their EXR and PNG are hbil's (a complete EXR with hbil's layers) in place of the sentinel.
   RunResult expect_failure(const std::string& args, Exit code,
-                           std::initializer_list<std::string> needles) {
-    test::write_text(path("out/out_0001.exr"), "previous output, must survive a failed run\n");
-    const auto before = snapshot(path("out"));
+                           std::initializer_list<std::string> needles,
+                           std::initializer_list<int> kept = {}) {
+    const std::string sentinel = "previous output, must survive a failed run\n";
+    test::write_text(path("out/out_0001.exr"), sentinel);
+    test::write_text(path("out/out_0002.exr"), sentinel);
+    auto before = snapshot(path("out"));
     const RunResult r = hbil(args);
     EXPECT_EQ(r.code, int(code)) << "stderr: " << r.err;
     for (const auto& n : needles)
       EXPECT_TRUE(contains(r.err, n)) << "stderr \"" << r.err << "\" lacks \"" << n << "\"";
-    EXPECT_EQ(snapshot(path("out")), before) << "a failed run changed the output folder";
+    auto after = snapshot(path("out"));
+    for (int f : kept) {
+      const std::string exr = "out_000" + std::to_string(f) + ".exr";
+      const std::string png = "out_000" + std::to_string(f) + ".png";
+      EXPECT_TRUE(after.count(exr) && after.count(png)) << "frame " << f << " was finished";
+      if (after.count(exr))
+        EXPECT_EQ(test::read_pixels(path("out/" + exr)).spec.channelnames, kOutputChannels);
+      after.erase(exr);
+      after.erase(png);
+      before.erase(exr);
+    }
+    EXPECT_EQ(after, before) << "a failed run changed what it had not finished";
+    EXPECT_TRUE(test::files_containing(dir.path(), ".hbil-tmp").empty());
     return r;
   }
 
@@ -434,34 +456,117 @@ TEST_F(Cli, MissingPassFailsWithoutOutput) {
   copy_frame(1);
   test::copy_exr(sample(2), in_frame(2), {"ViewLayer.Normal."});
   expect_failure(run_args(path("in/frame_####.exr"), path("out/out_####.exr")), Exit::missing_pass,
-                 {"hbil: error: ", "frame 2", in_frame(2), "ViewLayer.Normal.X"});
+                 {"hbil: error: ", "frame 2", in_frame(2), "ViewLayer.Normal.X"}, {});
 }
 
-TEST_F(Cli, NonFiniteDepthFailsWithoutOutput) {
+TEST_F(Cli, NonFiniteDepthFailsKeepingTheFramesBefore) {
   copy_frame(1);
   test::copy_exr(sample(2), in_frame(2), {}, [](Pixels& p) {
     p.at(10, 20, p.channel("ViewLayer.Depth.Z")) = std::numeric_limits<float>::quiet_NaN();
   });
   fs::copy_file(sample(2, ".camera.json"), in_frame(2, ".camera.json"));
   expect_failure(run_args(path("in/frame_####.exr"), path("out/out_####.exr")), Exit::bad_data,
-                 {"frame 2", in_frame(2), "ViewLayer.Depth.Z", "non-finite", "(10, 20)"});
+                 {"frame 2", in_frame(2), "ViewLayer.Depth.Z", "non-finite", "(10, 20)",
+                  "hbil: frame 1 was written (1 of 2); the others were not"},
+                 {1});
 }
 
-TEST_F(Cli, NegativeDepthFailsWithoutOutput) {
+TEST_F(Cli, NegativeDepthFailsKeepingTheFramesBefore) {
   copy_frame(1);
   test::copy_exr(sample(2), in_frame(2), {},
                  [](Pixels& p) { p.at(200, 100, p.channel("ViewLayer.Depth.Z")) = -2.5f; });
   fs::copy_file(sample(2, ".camera.json"), in_frame(2, ".camera.json"));
-  expect_failure(
-      run_args(path("in/frame_####.exr"), path("out/out_####.exr")), Exit::bad_data,
-      {"frame 2", in_frame(2), "ViewLayer.Depth.Z", "negative depth", "(200, 100)", "-2.5"});
+  expect_failure(run_args(path("in/frame_####.exr"), path("out/out_####.exr")), Exit::bad_data,
+                 {"frame 2", in_frame(2), "ViewLayer.Depth.Z", "negative depth", "(200, 100)",
+                  "-2.5", "hbil: frame 1 was written (1 of 2)"},
+                 {1});
 }
 
 TEST_F(Cli, ResolutionChangeFailsWithoutOutput) {
   copy_frame(1);
   test::crop_exr(sample(2), in_frame(2), 128, 72);
   expect_failure(run_args(path("in/frame_####.exr"), path("out/out_####.exr")), Exit::bad_data,
-                 {"frame 2", in_frame(2), "128x72", "256x144", in_frame(1)});
+                 {"frame 2", in_frame(2), "128x72", "256x144", in_frame(1)}, {});
+}
+
+// SIGTERM (what a farm's scheduler sends) in the middle of a run: the frames finished before
+// it stay, whole; the temporaries in flight are removed; the process ends by the signal (the
+// shell's 143) after one line saying which frames were written.
+TEST_F(Cli, SigtermKeepsFinishedFramesAndRemovesTemporaries) {
+  // Slow enough settings (about a second a frame here) that the signal arrives mid-run.
+  const std::string cmd = "exec " + test::shell_quote(HBIL_BINARY) + " " +
+                          run_args(test::kRoomPoles + "/frame_####.exr", path("out/out_####.exr"),
+                                   "-q --set steps=96 --set gather_steps=96 --set slices=6") +
+                          " 2> " + q(path("err.txt")) + " < /dev/null";
+  const pid_t pid = fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    execl("/bin/sh", "sh", "-c", cmd.c_str(), static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  // Waits for frame 1 to be in place, then for a temporary of a later frame.
+  const auto t0 = std::chrono::steady_clock::now();
+  auto waited = [&] { return std::chrono::steady_clock::now() - t0 > std::chrono::seconds(120); };
+  while (!fs::exists(path("out/out_0001.exr")) && !waited())
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  while (test::files_containing(path("out"), ".hbil-tmp").empty() && !waited())
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  ASSERT_FALSE(waited()) << "the run never wrote frame 1 and a temporary of frame 2";
+  ASSERT_EQ(kill(pid, SIGTERM), 0);
+  int status = 0;
+  ASSERT_EQ(waitpid(pid, &status, 0), pid);
+  const std::string err = test::read_text(path("err.txt"));
+  ASSERT_TRUE(WIFSIGNALED(status)) << "exit " << WEXITSTATUS(status) << ": " << err;
+  EXPECT_EQ(WTERMSIG(status), SIGTERM);
+  EXPECT_TRUE(contains(err, "hbil: interrupted (signal 15): ")) << err;
+  EXPECT_TRUE(test::files_containing(dir.path(), ".hbil-tmp").empty())
+      << "a temporary outlived the signal";
+  // Every frame in place is whole (the EXR with all its layers, and its PNG), and the line
+  // names as many frames as there are.
+  int whole = 0;
+  for (int f = 1; f <= 8; ++f) {
+    const std::string exr = path("out/out_000" + std::to_string(f) + ".exr");
+    if (!fs::exists(exr)) continue;
+    ++whole;
+    EXPECT_EQ(test::read_pixels(exr).spec.channelnames, kOutputChannels) << exr;
+    EXPECT_TRUE(fs::exists(path("out/out_000" + std::to_string(f) + ".png"))) << f;
+  }
+  EXPECT_GE(whole, 1);
+  EXPECT_LT(whole, 8) << "the signal came after the run: it proves nothing";
+  EXPECT_TRUE(contains(err, whole == 1
+                                ? "1 frame was written (frame 1)"
+                                : std::to_string(whole) + " frames were written (frames 1 to " +
+                                      std::to_string(whole) + ")"))
+      << err;
+}
+
+// A run killed outright (SIGKILL) leaves its temporaries; the next run into the folder
+// removes those of processes of this host that are gone, and no other file.
+TEST_F(Cli, StaleTemporariesOfDeadProcessesAreRemoved) {
+  char host[256] = {};
+  ASSERT_EQ(gethostname(host, sizeof host - 1), 0);
+  const pid_t dead = fork();  // a process that has ended and been reaped
+  ASSERT_GE(dead, 0);
+  if (dead == 0) _exit(0);
+  ASSERT_EQ(waitpid(dead, nullptr, 0), dead);
+  const std::string h = host, d = std::to_string(dead), me = std::to_string(getpid());
+  const std::vector<std::string> stale = {".out_0001.hbil-tmp-" + h + "-" + d + "-0.exr",
+                                          ".out_0001.hbil-tmp-display-" + h + "-" + d + "-1.png"};
+  const std::vector<std::string> kept = {
+      ".out_0001.hbil-tmp-" + h + "-" + me + "-0.exr",  // a process that runs
+      ".out_0001.hbil-tmp-other-node-" + d + "-0.exr",  // another host's
+      ".out_0001.hbil-tmp-" + d + "-0.exr",             // no host in the name
+      "out_0001.hbil-tmp-" + h + "-" + d + "-0.exr",    // not hidden
+      ".notes.txt"};
+  for (const auto& n : stale) test::write_text(path("out/" + n), "killed\n");
+  for (const auto& n : kept) test::write_text(path("out/" + n), "other\n");
+  const RunResult r =
+      hbil(run_args(test::kRoomPoles + "/frame_####.exr", path("out/out_####.exr"), "--frames 1"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(contains(r.err, "hbil: removed 2 temporary files left by a run that was killed"))
+      << r.err;
+  for (const auto& n : stale) EXPECT_FALSE(fs::exists(path("out/" + n))) << n;
+  for (const auto& n : kept) EXPECT_TRUE(fs::exists(path("out/" + n))) << n;
 }
 
 // The display image is written beside the EXR: when it cannot be, neither stays.

@@ -3,8 +3,10 @@
 // (see io/povray.h), so that `hbil run` reads a POV-Ray sequence as it reads a Cycles one.
 #include <OpenImageIO/imageio.h>
 
+#include <filesystem>
 #include <iostream>
 #include <map>
+#include <set>
 
 #include "cli/commands.h"
 #include "hbil/error.h"
@@ -68,9 +70,16 @@ void import_povray(const ImportOptions& o) {
     throw Error(Exit::usage, "-o " + o.out + ": " + std::to_string(frames.size()) +
                                  " frames need a frame pattern (e.g. out/frame_####.exr)");
 
-  // Every frame waits as a hidden temporary until all succeeded (see run.cpp).
+  // Each frame is written as a hidden temporary and renamed into place when it is complete;
+  // a failure keeps the frames before it (see run.cpp).
   io::OutputBatch batch;
-  for (const auto& f : frames) batch.expect(out.path(f.frame));
+  std::set<std::filesystem::path> folders;
+  for (const auto& f : frames) {
+    batch.expect(out.path(f.frame));
+    folders.insert(std::filesystem::path(out.path(f.frame)).parent_path());
+  }
+  io::install_interrupt_cleanup();
+  for (const auto& dir : folders) io::remove_stale_temporaries(dir.empty() ? "." : dir);
   try {
     for (const auto& f : frames) {
       const io::ImportedFrame img = io::import_povray_frame(f, o.view_layer);
@@ -78,6 +87,8 @@ void import_povray(const ImportOptions& o) {
       const std::string tmp = io::prepare_temporary(final_path, "pov");
       batch.add(tmp, final_path);
       write_frame(tmp, img, o.passes);
+      batch.commit();
+      io::note_frame_written(f.frame);
       if (!o.quiet) {
         std::string layers;
         for (const auto& l : img.layers) layers += (layers.empty() ? "" : ", ") + l;
@@ -85,7 +96,6 @@ void import_povray(const ImportOptions& o) {
                   << img.height << "): " << layers << "\n";
       }
     }
-    batch.commit();
   } catch (...) {
     batch.discard();
     throw;

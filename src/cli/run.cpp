@@ -19,6 +19,23 @@ namespace hbil::cli {
 
 namespace {
 
+// "frames 1-3, 5 were written (4 of 8); the others were not", or "no frame was written".
+std::string describe_written(const std::vector<int>& w, size_t total) {
+  if (w.empty()) return "no frame was written";
+  std::string list;
+  for (size_t a = 0; a < w.size();) {
+    size_t b = a;
+    while (b + 1 < w.size() && w[b + 1] == w[b] + 1) ++b;
+    list += (list.empty() ? "" : ", ") + std::to_string(w[a]);
+    if (b > a) list += "-" + std::to_string(w[b]);
+    a = b + 1;
+  }
+  return std::string(w.size() == 1 ? "frame " : "frames ") + list + (w.size() == 1 ? " was" : " were") +
+         " written (" + std::to_string(w.size()) + " of " + std::to_string(total) +
+         "); the others were not";
+}
+
+
 struct RunOptions {
   std::string input, output, frames, cut_frames;
   int threads = 0, preroll = 0;
@@ -90,9 +107,13 @@ void run(const RunOptions& o) {
   using Clock = std::chrono::steady_clock;
   const auto start = Clock::now();
 
+  // Each frame's files are renamed into place as soon as they are complete (frame_output.h);
+  // an interrupt removes the temporaries in flight, and a killed run's are removed here.
+  io::install_interrupt_cleanup();
+  if (const int stale = output.remove_stale(); stale > 0 && !o.quiet)
+    std::cerr << "hbil: removed " << stale << " temporary file" << (stale == 1 ? "" : "s")
+              << " left by a run that was killed\n";
   pipeline::SequenceJob::Hooks hooks;
-  // Finished frames wait as hidden temporaries and are renamed into place only when every
-  // frame succeeded: a failed run leaves the output folder as it was.
   hooks.deliver = [&](pipeline::FrameResult& r) { output.write(r); };
   hooks.delivered = [&](const pipeline::FrameResult& r) {
     if (o.verbose) {
@@ -137,10 +158,12 @@ void run(const RunOptions& o) {
   };
   try {
     job.run(hooks, overlap);
-    output.commit();
   } catch (...) {
     if (tty && !o.quiet) std::cerr << "\n";
     output.discard();
+    // Printed with --quiet too: which frames a rerun still needs.
+    const std::vector<int>& w = output.written();
+    std::cerr << "hbil: " << describe_written(w, nframes) << "\n";
     throw;
   }
   const double total = std::chrono::duration<double>(Clock::now() - start).count();

@@ -246,9 +246,8 @@ std::string write_display_temporary(const std::string& final_path, const std::ve
   spec.attribute("hbil:ocio", t.describe());
   if (!extra_description.empty()) spec.attribute("ImageDescription", extra_description);
 
-  std::error_code ec;
-  const fs::path tmp = prepare_temporary(final_path, "display-");
-  auto out = OIIO::ImageOutput::create(tmp.string());
+  Temporary tmp(final_path, "display");
+  auto out = OIIO::ImageOutput::create(tmp.path());
   if (!out)
     throw Error(Exit::output, final_path + ": cannot create an image writer: " + OIIO::geterror());
   // Transformed and written in strips of rows (each row is transformed on its own, so the
@@ -256,7 +255,7 @@ std::string write_display_temporary(const std::string& final_path, const std::ve
   constexpr int kStrip = 64;
   std::vector<float> buf;
   std::vector<uint8_t> bytes;
-  bool ok = out->open(tmp.string(), spec);
+  bool ok = out->open(tmp.path(), spec);
   for (int y0 = 0; ok && y0 < height; y0 += kStrip) {
     const int rows = std::min(kStrip, height - y0);
     const size_t first = size_t(y0) * size_t(width), n = size_t(rows) * size_t(width);
@@ -300,10 +299,10 @@ std::string write_display_temporary(const std::string& final_path, const std::ve
   if (!ok) {
     const std::string why = out->geterror();
     out.reset();
-    fs::remove(tmp, ec);
     throw Error(Exit::output, final_path + ": cannot write: " + why);
   }
-  return tmp.string();
+  out.reset();
+  return tmp.keep();
 }
 
 void write_display_image(const std::string& path, const std::vector<float>& pixels, int channels,

@@ -99,29 +99,10 @@ std::string camera_json(const Camera& c) {
   return j.dump();
 }
 
-std::string prepare_temporary(const std::string& final_path, const std::string& tag) {
-  const fs::path final_p(final_path);
-  std::error_code ec;
-  if (final_p.has_parent_path()) {
-    fs::create_directories(final_p.parent_path(), ec);
-    if (ec)
-      throw Error(Exit::output, final_path + ": cannot create folder " +
-                                    final_p.parent_path().string() + ": " + ec.message());
-  }
-  static std::atomic<int> counter{0};
-  // Appended piece by piece: "." + std::string trips GCC 12's -Wrestrict (a false positive).
-  std::string name = ".";
-  name += final_p.stem().string();
-  name += ".hbil-tmp-" + tag + std::to_string(getpid()) + "-" + std::to_string(counter++);
-  name += final_p.extension().string();
-  return (final_p.parent_path() / name).string();
-}
-
 std::string write_temporary(const std::string& final_path, const AoFrame& f,
                             const OIIO::ImageSpec& input_header, const Params& p, const Camera& cam,
                             std::optional<int> frame) {
-  const fs::path tmp = prepare_temporary(final_path);
-  std::error_code ec;
+  Temporary tmp(final_path);
   const std::vector<OutputChannel> plan = output_plan(f, p);
   OIIO::ImageSpec spec(f.width, f.height, int(plan.size()), OIIO::TypeDesc::FLOAT);
   spec.channelnames.clear();
@@ -153,7 +134,7 @@ std::string write_temporary(const std::string& final_path, const AoFrame& f,
   spec.attribute("hbil:camera", camera_json(cam));
   set_camera_attributes(spec, cam);
 
-  auto out = OIIO::ImageOutput::create(tmp.string());
+  auto out = OIIO::ImageOutput::create(tmp.path());
   if (!out)
     throw Error(Exit::output, final_path + ": cannot create an EXR writer: " + OIIO::geterror());
   // Written in strips of rows, so that no second copy of the whole frame is made.
@@ -162,7 +143,7 @@ std::string write_temporary(const std::string& final_path, const AoFrame& f,
   // OpenImageIO).
   const size_t row_bytes = size_t(f.width) * pixel_bytes(plan);
   std::vector<unsigned char> strip(size_t(kStrip) * row_bytes);
-  bool ok = out->open(tmp.string(), spec);
+  bool ok = out->open(tmp.path(), spec);
   std::vector<std::optional<NonFinite>> bad(kStrip);  // per row of the strip
   for (int y0 = 0; ok && y0 < f.height; y0 += kStrip) {
     const int y1 = std::min(y0 + kStrip, f.height);
@@ -172,7 +153,6 @@ std::string write_temporary(const std::string& final_path, const AoFrame& f,
     for (int y = y0; y < y1; ++y)
       if (const std::optional<NonFinite>& b = bad[y - y0]) {
         out->close();
-        fs::remove(tmp, ec);
         std::ostringstream m;
         if (frame)
           m << "frame " << *frame << " (" << final_path << ")";
@@ -186,11 +166,10 @@ std::string write_temporary(const std::string& final_path, const AoFrame& f,
     ok = out->write_scanlines(y0, y1, 0, OIIO::TypeUnknown, strip.data());
   }
   if (!ok || !out->close()) {
-    const std::string why = out->geterror();
-    fs::remove(tmp, ec);
-    throw Error(Exit::output, final_path + ": cannot write: " + why);
+    throw Error(Exit::output, final_path + ": cannot write: " + out->geterror());
   }
-  return tmp.string();
+  out.reset();
+  return tmp.keep();
 }
 
 void OutputBatch::expect(const std::string& final_path) {
@@ -205,22 +184,29 @@ void OutputBatch::add(const std::string& temporary, const std::string& final_pat
 }
 
 void OutputBatch::commit() {
-  for (const auto& [temporary, final_path] : files_) io::commit(temporary, final_path);
-  files_.clear();
+  while (!files_.empty()) {
+    const auto [temporary, final_path] = files_.front();
+    files_.erase(files_.begin());
+    io::commit(temporary, final_path);
+    committed_ = true;
+  }
 }
 
 void OutputBatch::discard() noexcept {
-  std::error_code ec;
-  for (const auto& f : files_) fs::remove(f.first, ec);
-  for (const auto& dir : created_) fs::remove_all(dir, ec);
+  for (const auto& f : files_) discard_temporary(f.first);
   files_.clear();
+  std::error_code ec;
+  // The folders the command created go too, unless they hold files it finished.
+  if (!committed_)
+    for (const auto& dir : created_) fs::remove_all(dir, ec);
 }
 
 void commit(const std::string& temporary, const std::string& final_path) {
   std::error_code ec;
   fs::rename(temporary, final_path, ec);
+  release_temporary(temporary);
   if (ec) {
-    fs::remove(temporary, ec);
+    discard_temporary(temporary);
     throw Error(Exit::output,
                 final_path + ": cannot rename the finished frame into place: " + ec.message());
   }

@@ -22,6 +22,7 @@
 #include "hbil/ao_frame.h"
 #include "hbil/camera.h"
 #include "hbil/params.h"
+#include "io/temporaries.h"
 
 namespace hbil::io {
 
@@ -63,17 +64,13 @@ std::string write_temporary(const std::string& final_path, const AoFrame& f,
                             const OIIO::ImageSpec& input_header, const Params& p, const Camera& cam,
                             std::optional<int> frame = std::nullopt);
 
-// Creates final_path's folder and returns a hidden, unique temporary name beside it,
-// ".<stem>.hbil-tmp-<tag><pid>-<n><extension>" (the extension kept so OIIO picks the same
-// format). Throws Error(Exit::output) when the folder cannot be created.
-std::string prepare_temporary(const std::string& final_path, const std::string& tag = "");
-
 // Renames a temporary into place (replacing an older file). Throws Error(Exit::output).
 void commit(const std::string& temporary, const std::string& final_path);
 
-// The files of one command, all or nothing: each waits as a temporary (add()) and commit()
-// renames them into place only once every one was written; discard() removes them and the
-// output folders that were missing when expect() was called.
+// Files waiting as temporaries (add()) until commit() renames them into place: the files of
+// one frame (its EXR and display image), or of one command that is all or nothing. discard()
+// removes the waiting ones and, when nothing was committed yet, the output folders that were
+// missing when expect() was called.
 class OutputBatch {
  public:
   // Before anything is written: a file the command will write. Its topmost missing folder
@@ -87,6 +84,7 @@ class OutputBatch {
  private:
   std::vector<std::pair<std::string, std::string>> files_;  // temporary, final
   std::set<std::filesystem::path> created_;
+  bool committed_ = false;
 };
 
 }  // namespace hbil::io

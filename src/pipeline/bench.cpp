@@ -459,16 +459,13 @@ void write_bench(const BenchResult& r, const std::string& dir) {
   if (ec) throw Error(Exit::output, dir + ": cannot create folder: " + ec.message());
   auto write_file = [&](const std::string& name, const std::string& text) {
     const std::string path = (fs::path(dir) / name).string();
-    const std::string tmp = io::prepare_temporary(path);
+    io::Temporary tmp(path);
     {
-      std::ofstream out(tmp, std::ios::binary);
+      std::ofstream out(tmp.path(), std::ios::binary);
       out << text;
-      if (!out.flush()) {
-        fs::remove(tmp, ec);
-        throw Error(Exit::output, path + ": cannot write");
-      }
+      if (!out.flush()) throw Error(Exit::output, path + ": cannot write");
     }
-    io::commit(tmp, path);
+    io::commit(tmp.keep(), path);
   };
   // JSON: everything.
   nlohmann::json j;

@@ -12,6 +12,7 @@
 #include <sstream>
 
 #include "hbil/error.h"
+#include "io/exr_output.h"
 
 namespace hbil::pipeline {
 
@@ -254,15 +255,10 @@ void write_chart_png(const std::vector<ChartPanel>& panels, const std::string& p
     if (size.defined()) x -= t.anchor > 0 ? size.width() : t.anchor == 0 ? size.width() / 2 : 0;
     IBA::render_text(buf, x, int(std::lround(t.y)), t.text, t.size, font, t.colour);
   }
-  const std::string tmp = path + ".tmp.png";
-  if (!buf.write(tmp, OIIO::TypeDesc::UINT8)) {
-    std::error_code ec;
-    std::filesystem::remove(tmp, ec);
+  io::Temporary tmp(path);
+  if (!buf.write(tmp.path(), OIIO::TypeDesc::UINT8))
     throw Error(Exit::output, path + ": cannot write the chart: " + buf.geterror());
-  }
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) throw Error(Exit::output, path + ": cannot write the chart: " + ec.message());
+  io::commit(tmp.keep(), path);
 }
 
 }  // namespace hbil::pipeline

@@ -1,6 +1,7 @@
 // frame_output.cpp: see frame_output.h.
 #include "pipeline/frame_output.h"
 
+#include <algorithm>
 #include <exception>
 #include <filesystem>
 #include <future>
@@ -99,7 +100,20 @@ FrameOutput::FrameOutput(const OutputSettings& s, const SequenceJob& job)
   for (int f : plan.frames) {
     batch_.expect(out_.path(f));
     if (display_pattern_) batch_.expect(display_pattern_->path(f));
+    for (const std::string& file :
+         {out_.path(f), display_pattern_ ? display_pattern_->path(f) : out_.path(f)}) {
+      std::string dir = fs::path(file).parent_path().string();
+      if (dir.empty()) dir = ".";
+      if (std::find(folders_.begin(), folders_.end(), dir) == folders_.end())
+        folders_.push_back(dir);
+    }
   }
+}
+
+int FrameOutput::remove_stale() const {
+  int n = 0;
+  for (const std::string& dir : folders_) n += io::remove_stale_temporaries(dir);
+  return n;
 }
 
 std::string FrameOutput::describe_display() const {
@@ -111,7 +125,7 @@ void FrameOutput::write(const FrameResult& r) {
   const std::string out_path = out_.path(r.frame);
   // The display image is written beside the EXR, on a thread of its own (PNG's deflate runs
   // on one core). Whatever either write leaves goes into the batch before an error is
-  // passed on, so that a failed run removes it.
+  // passed on, so that the failing frame leaves nothing.
   std::future<std::string> shown;
   const std::string shown_path = display_ ? display_pattern_->path(r.frame) : "";
   if (display_)
@@ -137,7 +151,13 @@ void FrameOutput::write(const FrameResult& r) {
       if (!failed) failed = std::current_exception();
     }
   }
-  if (failed) std::rethrow_exception(failed);
+  if (failed) {
+    batch_.discard();
+    std::rethrow_exception(failed);
+  }
+  batch_.commit();  // the EXR, then the display image
+  written_.push_back(r.frame);
+  io::note_frame_written(r.frame);
 }
 
 }  // namespace hbil::pipeline

@@ -1,13 +1,14 @@
 // frame_output.h: where a sequence job's frames go as files: the EXR of the requested layers
-// per frame and, beside it, a display image through OpenColorIO. Every file is written
-// under a hidden temporary name and renamed into place by commit(), when the whole run has
-// succeeded; discard() removes them (and the folders the run created) after a failure, so
-// that a failed run leaves the output folder as it was.
+// per frame and, beside it, a display image through OpenColorIO. Each file is written under
+// a hidden temporary name (io/temporaries.h), and a frame's files are renamed into place
+// together once both are complete: a failure keeps the frames finished before it and
+// leaves the files of the failing frame and of later ones as they were.
 #pragma once
 
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "io/display.h"
 #include "io/exr_output.h"
@@ -38,10 +39,16 @@ class FrameOutput {
   // "" without display images, else "<pattern> (<layer>): <OCIO description>".
   std::string describe_display() const;
 
-  // Writes the frame's files as temporaries (thread-safe; one frame at a time is enough).
+  // Removes the temporaries a killed run left in the output folders (io/temporaries.h);
+  // returns how many.
+  int remove_stale() const;
+  // Writes the frame's files and renames them into place (one frame at a time). A failure
+  // removes what the frame wrote.
   void write(const FrameResult& r);
-  void commit() { batch_.commit(); }
+  // After a failure: removes the output folders the run created if no frame was written.
   void discard() noexcept { batch_.discard(); }
+  // The frames written so far, in order.
+  const std::vector<int>& written() const { return written_; }
 
  private:
   io::FramePattern out_;
@@ -50,6 +57,8 @@ class FrameOutput {
   std::string display_layer_, display_out_;
   std::optional<io::DisplayTransform> display_;
   io::OutputBatch batch_;
+  std::vector<std::string> folders_;  // where the files go
+  std::vector<int> written_;
 };
 
 }  // namespace hbil::pipeline

@@ -98,11 +98,25 @@ Overlap parse_overlap(const std::string& text) {
 SequenceJob::SequenceJob(SequencePlan plan, const Params& requested) : plan_(std::move(plan)) {
   const int f = plan_.frames.front();
   first_ = io::open_frame(plan_.input.path(f), f, requested);
-  // Every input is there and has a readable header before anything is computed.
+  // Every input is there and has a readable header before anything is computed; then every
+  // one has the passes the outputs need and the size of the first, so that what a header
+  // can tell fails the run before its first frame is written.
+  std::vector<io::InputFrame> others;
   for (const std::vector<int>* frames : {&plan_.preroll, &plan_.frames})
     for (int other : *frames)
-      if (other != f) io::open_frame(plan_.input.path(other), other, requested);
+      if (other != f) others.push_back(io::open_frame(plan_.input.path(other), other, requested));
   p_ = io::resolve_outputs(first_, requested, &why_dropped_);
+  const io::InputFrame& head = plan_.preroll.empty() ? first_ : others.front();
+  auto check = [&](const io::InputFrame& in) {
+    io::fields_needed(in, p_);  // exit 4, naming the channels looked for
+    if (in.spec.width != head.spec.width || in.spec.height != head.spec.height)
+      throw Error(Exit::bad_data, in.where() + ": resolution " + std::to_string(in.spec.width) +
+                                      "x" + std::to_string(in.spec.height) + " differs from " +
+                                      std::to_string(head.spec.width) + "x" +
+                                      std::to_string(head.spec.height) + " of " + head.path);
+  };
+  check(first_);
+  for (const io::InputFrame& in : others) check(in);
   if (p_.gather_radius_auto || p_.thickness_auto || p_.gather_thickness_auto) {
     // From the depth (else position) and camera of the sequence's first frame on disk, not
     // the run's: every chunk of a shot (--frames, --preroll) then uses the values a run over

@@ -47,26 +47,32 @@ for t in "${targets[@]}"; do
   [ -n "${RUNS:-}" ] && args+=(-runs="$RUNS")
   [ -n "${RUNS:-}" ] && ((jobs == 1)) && args+=(-seed="${SEED:-1}")
   if ((jobs > 1)); then
-    # -jobs writes one log per job (fuzz-<n>.log in the current folder, so run in $B); the
-    # parent's output repeats each, so they are removed, not appended.
+    # -jobs writes one log per job (fuzz-<n>.log in the current folder, so run in $B),
+    # kept as fuzz-<target>-job<n>.log: the parent's own log does not repeat a job that
+    # stopped on a finding.
+    rm -f "$B"/fuzz-[0-9]*.log "$B/fuzz-$t"-job*.log
     (cd "$B" && ASAN_OPTIONS=detect_leaks=1:quarantine_size_mb=64 "$bin" "${args[@]}" \
       -jobs="$jobs" -workers="$jobs" "$work" >"$log" 2>&1)
     rc=$?
-    rm -f "$B"/fuzz-[0-9]*.log
+    for j in "$B"/fuzz-[0-9]*.log; do
+      [ -e "$j" ] && mv "$j" "$B/fuzz-$t-job$(basename "$j" .log | tr -dc 0-9).log"
+    done
+    logs=("$B/fuzz-$t"-job*.log)
   else
     ASAN_OPTIONS=detect_leaks=1:quarantine_size_mb=64 "$bin" "${args[@]}" "$work" >"$log" 2>&1
     rc=$?
+    logs=("$log")
   fi
-  execs=$(grep -ho 'stat::number_of_executed_units: [0-9]*' "$log" | awk '{s += $2} END {print s + 0}')
-  last=$(grep -hE '^#[0-9]+' "$log" | tail -1)
+  execs=$(grep -ho 'stat::number_of_executed_units: [0-9]*' "${logs[@]}" | awk '{s += $2} END {print s + 0}')
+  last=$(for l in "${logs[@]}"; do grep -hE '^#[0-9]+' "$l" | tail -1; done | sort -t: -k2 -n | tail -1)
   cov=$(sed -n 's/.* cov: \([0-9]*\).*/\1/p' <<<"$last")
   ft=$(sed -n 's/.* ft: \([0-9]*\).*/\1/p' <<<"$last")
   n=$(find "$work" -type f | wc -l)
-  took=$(sed -n 's/^Done [0-9]* runs in \([0-9]*\) second.*/\1/p' "$log" | tail -1)
+  took=$(sed -n 's/^Done [0-9]* runs in \([0-9]*\) second.*/\1/p' "${logs[@]}" | sort -n | tail -1)
   if ((rc != 0)); then
     status=1
-    echo "fuzz_$t: FINDING (exit $rc) after $execs executions; see $log"
-    grep -hE 'ERROR|SUMMARY|Test unit written|fuzz_[a-z]*:' "$log" | head -8
+    echo "fuzz_$t: FINDING (exit $rc) after $execs executions; see ${logs[*]}"
+    grep -hE 'ERROR|SUMMARY|Test unit written|fuzz_[a-z]*:' "${logs[@]}" | head -8
   else
     echo "fuzz_$t: $execs executions in ${took:-$seconds} s, ${cov:-?} edges, ${ft:-?} features, $n inputs in the corpus"
   fi
