@@ -269,6 +269,37 @@ TEST(ExrLayouts, ChannelListBeyondItsSizeIsRefusedBeforeReading) {
   }
 }
 
+// OpenEXR reads a fixed-size value by its type, whatever size the attribute claims, and reads
+// on from there; a walk that skips the claimed size is then out of step with it, and missed an
+// attribute claiming 1.7 GB that OpenEXR allocated (found by tests/fuzz/fuzz_frame). Such a
+// header is refused, exit 3, and so is a name of more than 255 characters.
+TEST(ExrLayouts, FixedSizeAttributeOfAnotherSizeOrOverlongNameIsRefused) {
+  TempDir dir{test::test_name()};
+  std::ifstream in(test::kRoomPoles + "/frame_0001.exr", std::ios::binary);
+  const std::string good((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string attr("screenWindowWidth\0float\0", 24);
+  const size_t at = good.find(attr);
+  ASSERT_NE(at, std::string::npos);
+  {
+    std::string bytes = good;
+    bytes[at + attr.size()] = 8;  // the float's size: 8 instead of 4
+    const std::string damaged = dir / "size.exr";
+    std::ofstream(damaged, std::ios::binary | std::ios::trunc) << bytes;
+    expect_error(
+        [&] { open_frame(damaged, 1, Params{}); }, Exit::input,
+        {damaged, "attribute \"screenWindowWidth\" (float) claims 8 bytes, its type has 4"});
+  }
+  {
+    // The attribute's name run on over 300 characters (its NUL and the type overwritten).
+    std::string bytes = good;
+    for (size_t k = 0; k < 300; ++k) bytes[at + k] = 'n';
+    const std::string damaged = dir / "name.exr";
+    std::ofstream(damaged, std::ios::binary | std::ios::trunc) << bytes;
+    expect_error([&] { open_frame(damaged, 1, Params{}); }, Exit::input,
+                 {damaged, "a name of more than 255 characters"});
+  }
+}
+
 // A channel of an undefined pixel type made OpenImageIO abort the process (found by
 // tests/fuzz/fuzz_frame), and a sampling of 0 would divide by zero: both refused, exit 3.
 TEST(ExrLayouts, UndefinedPixelTypeOrSamplingIsRefusedBeforeReading) {

@@ -183,6 +183,39 @@ void note_attribute(const std::string& name, const std::string& type, const std:
   }
 }
 
+// The size of a value of one of OpenEXR's fixed-size attribute types; 0 for the others
+// (string, chlist, preview, vectors, and types OpenEXR does not know, which it keeps opaque
+// at their claimed size).
+int fixed_size(const std::string& type) {
+  static const std::pair<const char*, int> kSizes[] = {{"int", 4},
+                                                       {"float", 4},
+                                                       {"double", 8},
+                                                       {"box2i", 16},
+                                                       {"box2f", 16},
+                                                       {"v2i", 8},
+                                                       {"v2f", 8},
+                                                       {"v2d", 16},
+                                                       {"v3i", 12},
+                                                       {"v3f", 12},
+                                                       {"v3d", 24},
+                                                       {"m33f", 36},
+                                                       {"m33d", 72},
+                                                       {"m44f", 64},
+                                                       {"m44d", 128},
+                                                       {"compression", 1},
+                                                       {"lineOrder", 1},
+                                                       {"envmap", 1},
+                                                       {"deepImageState", 1},
+                                                       {"tiledesc", 9},
+                                                       {"chromaticities", 32},
+                                                       {"keycode", 28},
+                                                       {"timecode", 8},
+                                                       {"rational", 8}};
+  for (const auto& [name, size] : kSizes)
+    if (type == name) return size;
+  return 0;
+}
+
 // check_header_size() on what the attributes of one header claim, before any library sizes
 // a buffer from them.
 void check_facts(const ExrHeaderFacts& facts, size_t file_bytes, const std::string& where) {
@@ -210,12 +243,17 @@ void check_exr_attributes(const std::string& path, const std::string& where) {
   const auto size = std::filesystem::file_size(path, ec);
   if (ec) return;
   const bool multipart = (head[5] & 0x10) != 0;  // version flags, bit 12
-  // A null-terminated name of at most 255 characters; false at the end of the file.
+  // A null-terminated name of at most 255 characters; false at the end of the file. A longer
+  // one is damage: past it, where OpenEXR goes on reading is not where this walk would.
   auto read_name = [&](std::string& name) {
     name.clear();
     for (char c; in.get(c);) {
       if (c == 0) return true;
-      if (name.size() == 255) return false;
+      if (name.size() == 255)
+        throw Error(Exit::input, where +
+                                     ": damaged OpenEXR header: a name of more than 255 "
+                                     "characters (\"" +
+                                     name.substr(0, 40) + "...\")");
       name += c;
     }
     return false;
@@ -234,6 +272,12 @@ void check_exr_attributes(const std::string& path, const std::string& where) {
         throw Error(Exit::input, where + ": damaged OpenEXR header: attribute \"" + name + "\" (" +
                                      type + ") claims " + std::to_string(claimed) + " bytes, " +
                                      std::to_string(left) + " are left in the file");
+      // OpenEXR reads a value of a fixed-size type by its type, whatever size it claims, and
+      // then goes on from there: any other size would put it out of step with this walk.
+      if (const int natural = fixed_size(type); natural > 0 && claimed != natural)
+        throw Error(Exit::input, where + ": damaged OpenEXR header: attribute \"" + name + "\" (" +
+                                     type + ") claims " + std::to_string(claimed) +
+                                     " bytes, its type has " + std::to_string(natural));
       if (type == "chlist" || type == "box2i" || type == "compression" || type == "tiledesc") {
         value.resize(size_t(claimed));
         if (!in.read(value.data(), claimed)) return;
