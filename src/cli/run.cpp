@@ -30,11 +30,10 @@ std::string describe_written(const std::vector<int>& w, size_t total) {
     if (b > a) list += "-" + std::to_string(w[b]);
     a = b + 1;
   }
-  return std::string(w.size() == 1 ? "frame " : "frames ") + list + (w.size() == 1 ? " was" : " were") +
-         " written (" + std::to_string(w.size()) + " of " + std::to_string(total) +
-         "); the others were not";
+  return std::string(w.size() == 1 ? "frame " : "frames ") + list +
+         (w.size() == 1 ? " was" : " were") + " written (" + std::to_string(w.size()) + " of " +
+         std::to_string(total) + "); the others were not";
 }
-
 
 struct RunOptions {
   std::string input, output, frames, cut_frames;

@@ -120,8 +120,7 @@ std::string prepare_temporary(const std::string& final_path, const std::string& 
   name += final_p.stem().string();
   name += ".hbil-tmp-";
   if (!tag.empty()) name += tag + "-";
-  name += host_tag() + "-" + std::to_string(getpid()) + "-" +
-          std::to_string(counter++);
+  name += host_tag() + "-" + std::to_string(getpid()) + "-" + std::to_string(counter++);
   name += final_p.extension().string();
   const std::string path = (final_p.parent_path() / name).string();
   register_temporary(path);
