@@ -201,6 +201,13 @@ TEST(PovrayImport, CameraFileErrorsNameTheFileAndKey) {
   test::expect_error([&] { io::read_povray_camera(write(mirrored)); }, Exit::camera, {"mirrored"});
   test::expect_error([&] { io::read_povray_camera(dir / "nothing.json"); }, Exit::input,
                      {"nothing.json"});
+  // "format" given twice, the second a number: the last counts, and a number was read as a
+  // string, an escaping exception (found by tests/fuzz/fuzz_povray).
+  std::string text = j.dump();
+  text.insert(text.size() - 1, ",\"format\":9");
+  test::write_text(dir / "camera1.json", text);
+  test::expect_error([&] { io::read_povray_camera(dir / "camera1.json"); }, Exit::camera,
+                     {"camera1.json", "\"format\" must be \"hbil-povray-camera-1\""});
 }
 
 TEST(PovrayImport, RoomSampleHasEveryLayerAndTheScenesCamera) {

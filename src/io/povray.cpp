@@ -83,7 +83,8 @@ PovrayCamera read_povray_camera(const std::string& path) {
   } catch (const json::exception& e) {
     camera_file_error(path, std::string("not valid JSON: ") + e.what());
   }
-  if (!j.is_object() || j.value("format", "") != "hbil-povray-camera-1")
+  // (A key given twice keeps its last value, of any type: compared as JSON, not read as a string.)
+  if (!j.is_object() || !j.contains("format") || j["format"] != "hbil-povray-camera-1")
     camera_file_error(path, "key \"format\" must be \"hbil-povray-camera-1\"");
   PovrayCamera c;
   c.frame = int(read_num(j, "frame", path));
