@@ -16,12 +16,11 @@
 #
 # The long campaign: JOBS=2 tests/fuzz/run.sh 3600 (an hour per target on 2 cores).
 #
-# A repeatable run (what CI does): RUNS=N stops each target after N executions (each job
-# after N with JOBS), SEED=S
-# (default 1) fixes libFuzzer's random choices, and CORPUS=DIR puts the working corpora in
-# DIR/<target>/ instead (a fresh DIR starts from the committed seeds alone). With one job,
-# the same build then makes the same inputs in the same order, so a run that passed here
-# passes there; SECONDS still bounds it.
+# A bounded run (what CI does): RUNS=N stops each target after N executions (each job after
+# N with JOBS), SEED=S (default 1, one job only) fixes libFuzzer's random choices, and
+# CORPUS=DIR puts the working corpora in DIR/<target>/ instead (a fresh DIR starts from the
+# committed seeds alone). The inputs made then depend on the seed and little else, though
+# not on it alone: coverage also sees the build's paths and threads. SECONDS still bounds it.
 # Replaying one input: build-fuzz/tests/fuzz/fuzz_<target> FILE.
 set -uo pipefail
 cd "$(dirname "$0")/../.."
