@@ -22,6 +22,16 @@ double ms(Clock::time_point a, Clock::time_point b) {
   return std::chrono::duration<double, std::milli>(b - a).count();
 }
 
+// A frame whose size is not that of the run's first frame (first_path): exit 5.
+void require_same_size(const io::InputFrame& in, int width, int height,
+                       const std::string& first_path) {
+  if (in.spec.width != width || in.spec.height != height)
+    throw Error(Exit::bad_data, in.where() + ": resolution " + std::to_string(in.spec.width) + "x" +
+                                    std::to_string(in.spec.height) + " differs from " +
+                                    std::to_string(width) + "x" + std::to_string(height) + " of " +
+                                    first_path);
+}
+
 }  // namespace
 
 std::set<int> parse_cut_frames(const std::string& text) {
@@ -109,11 +119,7 @@ SequenceJob::SequenceJob(SequencePlan plan, const Params& requested) : plan_(std
   const io::InputFrame& head = plan_.preroll.empty() ? first_ : others.front();
   auto check = [&](const io::InputFrame& in) {
     io::fields_needed(in, p_);  // exit 4, naming the channels looked for
-    if (in.spec.width != head.spec.width || in.spec.height != head.spec.height)
-      throw Error(Exit::bad_data, in.where() + ": resolution " + std::to_string(in.spec.width) +
-                                      "x" + std::to_string(in.spec.height) + " differs from " +
-                                      std::to_string(head.spec.width) + "x" +
-                                      std::to_string(head.spec.height) + " of " + head.path);
+    require_same_size(in, head.spec.width, head.spec.height, head.path);
   };
   check(first_);
   for (const io::InputFrame& in : others) check(in);
@@ -214,11 +220,8 @@ void SequenceJob::run(const Hooks& hooks, Overlap overlap_mode, const SH9* given
         width = in.spec.width;
         height = in.spec.height;
         first_path = in.path;
-      } else if (in.spec.width != width || in.spec.height != height) {
-        throw Error(Exit::bad_data, in.where() + ": resolution " + std::to_string(in.spec.width) +
-                                        "x" + std::to_string(in.spec.height) + " differs from " +
-                                        std::to_string(width) + "x" + std::to_string(height) +
-                                        " of " + first_path);
+      } else {
+        require_same_size(in, width, height, first_path);  // the file changed since the start
       }
       if (cur.zero.count > 0 && hooks.warning) {
         const size_t i = cur.zero.first;
