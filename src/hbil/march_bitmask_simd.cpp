@@ -9,9 +9,10 @@
 //  - a lane's `continue` becomes a mask for that sample, its `break` (the screen edge) a
 //    mask for the rest of the side;
 //  - the sample's fields are gathered by index (position, normal, thickness, radiance);
-//  - the sectors a sample newly covers are summed lowest first, one bit per lane per pass,
-//    until no lane has any left (each sector is new at most once per slice);
-//  - the sector weights of the 33 boundaries are a per-lane table in a stack buffer;
+//  - the sectors a sample newly covers are summed lowest first, one masked add per sector
+//    that is new in any lane (each sector is new at most once per slice);
+//  - the antiderivatives at the 33 boundaries, and the 32 sector weights, are per-lane
+//    tables in stack buffers;
 //  - with a GatherLog, each lane's lit samples are kept per lane and appended pixel by pixel
 //    after the vector, in the scalar march's order.
 // Lanes of background pixels and past the run's end are masked off from the start.
@@ -22,6 +23,7 @@
 //
 #include <hwy/highway.h>
 
+#include <bit>
 #include <cstdint>
 
 #include "hbil/march_simd-inl.h"
@@ -55,7 +57,6 @@ void MarchBitmaskRow(const SampleView& view, int i0, int j, int count, const flo
   const VF zero = hn::Zero(d), one = hn::Set(d, 1.f), half = hn::Set(d, 0.5f);
   const VF stride = hn::Set(d, float(view.stride));
   const VF grazing2 = hn::Set(d, kGrazing2);
-  const VI lane = hn::Iota(di, 0);
   const MF none = hn::FirstN(d, 0);
   const bool has_fill = gather && c.has_fill();
   const V3 fill{hn::Set(d, c.fill.x), hn::Set(d, c.fill.y), hn::Set(d, c.fill.z)};
@@ -65,6 +66,7 @@ void MarchBitmaskRow(const SampleView& view, int i0, int j, int count, const flo
   HWY_ALIGN float b_vis[(kSectors + 1) * kMaxLanes];
   HWY_ALIGN float b_bx[(kSectors + 1) * kMaxLanes];
   HWY_ALIGN float b_by[(kSectors + 1) * kMaxLanes];
+  HWY_ALIGN float w_ao[kSectors * kMaxLanes];  // each sector's AO weight, b_ao[k + 1] − b_ao[k]
   HWY_ALIGN float lane_x[kMaxLanes], lane_y[kMaxLanes];
 
   if (!view.radiance) log = nullptr;
@@ -119,6 +121,9 @@ void MarchBitmaskRow(const SampleView& view, int i0, int j, int count, const flo
         cb = hn::Sub(hn::Mul(cb, vcd), hn::Mul(sb, vsd));
         sb = sn;
       }
+      for (int k = 0; k < kSectors; ++k)
+        hn::Store(hn::Sub(hn::Load(d, b_ao + (k + 1) * N), hn::Load(d, b_ao + k * N)), d,
+                  w_ao + k * N);
       VU occluded = hn::Zero(du), occluded_g = hn::Zero(du);
       V3 irradiance{zero, zero, zero};
       for (int side = 0; side < 2; ++side) {
@@ -146,7 +151,7 @@ void MarchBitmaskRow(const SampleView& view, int i0, int j, int count, const flo
           MF m = st.m;
           if (hn::AllFalse(d, m)) continue;
           const VF o = st.o;
-          const VI k_s = st.k_s, k3 = st.k3;
+          const VI k_s = st.k_s;
           const V3 &S = st.S, &n_s = st.n_s, &d3 = st.d3;
           const VF dist2 = st.dist2;
           const MF in_ao = near ? hn::And(m, hn::Lt(dist2, hn::Set(d, px.r2))) : none;
@@ -204,25 +209,23 @@ void MarchBitmaskRow(const SampleView& view, int i0, int j, int count, const flo
           occluded_g = hn::Or(occluded_g, mask);
           if (hn::AllFalse(du, hn::Ne(fresh, hn::Zero(du)))) continue;
           const MF any_fresh = hn::RebindMask(d, hn::Ne(fresh, hn::Zero(du)));
+          // Σ over each lane's fresh sectors q, lowest first, of the sector's AO weight: one
+          // masked add per sector that is fresh in any lane (neighbouring pixels cover much
+          // the same sectors), in the scalar march's order for every lane.
+          HWY_ALIGN std::uint32_t fresh_lane[kMaxLanes];
+          hn::Store(fresh, du, fresh_lane);
+          std::uint32_t any_bits = 0;
+          for (size_t l = 0; l < N; ++l) any_bits |= fresh_lane[l];
           VF w = zero;
-          for (;;) {
-            const auto has = hn::Ne(fresh, hn::Zero(du));
-            if (hn::AllFalse(du, has)) break;
-            // The lowest set bit's index q from the exponent of float(bit).
-            const VU low = hn::And(fresh, hn::Sub(hn::Zero(du), fresh));
-            const VF lowf = hn::ConvertTo(d, hn::BitCast(di, low));
-            const VI q =
-                hn::Sub(hn::And(hn::ShiftRight<23>(hn::BitCast(di, lowf)), hn::Set(di, 0xFF)),
-                        hn::Set(di, 127));
-            const VI at = hn::IfThenElseZero(hn::RebindMask(di, has),
-                                             hn::Add(hn::Mul(q, hn::Set(di, int(N))), lane));
-            const VF wq = hn::Sub(hn::GatherIndex(d, b_ao + N, at), hn::GatherIndex(d, b_ao, at));
-            w = hn::Add(w, hn::IfThenElseZero(hn::RebindMask(d, has), wq));
-            fresh = hn::And(fresh, hn::Sub(fresh, hn::Set(du, 1u)));
+          for (; any_bits; any_bits &= any_bits - 1) {
+            const int q = std::countr_zero(any_bits);
+            const MF has =
+                hn::RebindMask(d, hn::Ne(hn::And(fresh, hn::Set(du, 1u << q)), hn::Zero(du)));
+            w = hn::IfThenElse(has, hn::Add(w, hn::Load(d, w_ao + q * N)), w);
           }
           // view.radiance[k_s] * facing_weight(n_s·d3 / dist) * w
           const VF fw = FacingWeight(d, Dot(n_s, d3), hn::Sqrt(dist2));
-          const V3 L = Gather3(d, view.radiance, k3);
+          const V3 L = Gather3(d, view.radiance, st.k3);
           const V3 add = Scale(Scale(L, fw), w);
           irradiance = Select(any_fresh, Add3(irradiance, add), irradiance);
           if (log) {
