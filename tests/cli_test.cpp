@@ -471,6 +471,80 @@ TEST_F(Cli, NonFiniteDepthFailsKeepingTheFramesBefore) {
                  {1});
 }
 
+// --log-json: one JSON object per line, appended: the run's start, a line per frame once its
+// files are in place (stage times, camera, cut, history), and the end with the exit status.
+std::vector<nlohmann::json> log_lines(const std::string& file) {
+  std::vector<nlohmann::json> v;
+  std::istringstream in(test::read_text(file));
+  for (std::string line; std::getline(in, line);) v.push_back(nlohmann::json::parse(line));
+  return v;
+}
+
+TEST_F(Cli, LogJsonRecordsEachFrameAndTheEnd) {
+  const std::string log = path("logs/run.jsonl");  // its folder is created
+  const RunResult r = hbil(run_args(test::kRoomPoles + "/frame_####.exr", path("out/f_####.exr"),
+                                    "--frames 1-3 --cut-frames 3 -q --log-json " + q(log)));
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto v = log_lines(log);
+  ASSERT_EQ(v.size(), 5u) << test::read_text(log);
+  EXPECT_EQ(v[0]["event"], "start");
+  EXPECT_EQ(v[0]["frames"], nlohmann::json::array({1, 2, 3}));
+  EXPECT_EQ(v[0]["resolution"], nlohmann::json::array({256, 144}));
+  EXPECT_EQ(v[0]["outputs"],
+            nlohmann::json::array({"ao", "bentcone", "irradiance", "indirect", "composite"}));
+  EXPECT_EQ(v[0]["input"], test::kRoomPoles + "/frame_####.exr");
+  for (int f = 1; f <= 3; ++f) {
+    const nlohmann::json& e = v[size_t(f)];
+    EXPECT_EQ(e["event"], "frame");
+    EXPECT_EQ(e["frame"], f);
+    EXPECT_EQ(e["index"], f);
+    EXPECT_EQ(e["of"], 3);
+    for (const char* k : {"read_ms", "camera_ms", "compute_ms", "write_ms"})
+      EXPECT_GE(e[k].get<double>(), 0.0) << k;
+    EXPECT_GT(e["compute_ms"].get<double>(), 0.0);
+    EXPECT_EQ(e["camera"], "sidecar frame_000" + std::to_string(f) + ".camera.json");
+    const std::string stem = path("out/f_000" + std::to_string(f));
+    EXPECT_EQ(e["files"], nlohmann::json::array({stem + ".exr", stem + ".png"}));
+    for (const auto& file : e["files"]) EXPECT_TRUE(fs::exists(file.get<std::string>()));
+  }
+  // Frame 1 has no history, frame 2 reprojects frame 1's, frame 3 is a given cut.
+  EXPECT_TRUE(v[1]["history"].is_null() && v[1]["cut"].is_null());
+  EXPECT_GT(v[2]["history"].get<double>(), 0.9);
+  EXPECT_LE(v[2]["history"].get<double>(), 1.0);
+  EXPECT_EQ(v[2]["reprojection"], "vector");
+  EXPECT_EQ(v[3]["cut"], "given");
+  EXPECT_TRUE(v[3]["history"].is_null());
+  EXPECT_EQ(v[4]["event"], "end");
+  EXPECT_EQ(v[4]["exit"], 0);
+  EXPECT_EQ(v[4]["written"], 3);
+  EXPECT_FALSE(v[4].contains("error"));
+
+  // A second run appends; one that fails logs its exit status and what it wrote, here frame 1.
+  copy_frame(1);
+  test::copy_exr(sample(2), in_frame(2), {}, [](Pixels& p) {
+    p.at(10, 20, p.channel("ViewLayer.Depth.Z")) = std::numeric_limits<float>::quiet_NaN();
+  });
+  fs::copy_file(sample(2, ".camera.json"), in_frame(2, ".camera.json"));
+  expect_failure(
+      run_args(path("in/frame_####.exr"), path("out/out_####.exr"), "--log-json " + q(log)),
+      Exit::bad_data, {"frame 2", "non-finite"}, {1});
+  const auto w = log_lines(log);
+  ASSERT_EQ(w.size(), 5u + 3u) << test::read_text(log);
+  EXPECT_EQ(w[5]["event"], "start");
+  EXPECT_EQ(w[6]["event"], "frame");
+  EXPECT_EQ(w[6]["frame"], 1);
+  EXPECT_EQ(w[7]["event"], "end");
+  EXPECT_EQ(w[7]["exit"], int(Exit::bad_data));
+  EXPECT_EQ(w[7]["written"], 1);
+  EXPECT_TRUE(contains(w[7]["error"].get<std::string>(), "non-finite")) << w[7];
+
+  // A log that cannot be opened is an output error before anything runs.
+  test::write_text(path("blocker"), "a file, not a folder\n");
+  expect_failure(run_args(test::kRoomPoles + "/frame_####.exr", path("out/out_####.exr"),
+                          "--frames 1 --log-json " + q(path("blocker/run.jsonl"))),
+                 Exit::output, {"--log-json", path("blocker/run.jsonl")});
+}
+
 TEST_F(Cli, NegativeDepthFailsKeepingTheFramesBefore) {
   copy_frame(1);
   test::copy_exr(sample(2), in_frame(2), {},
@@ -496,7 +570,9 @@ TEST_F(Cli, SigtermKeepsFinishedFramesAndRemovesTemporaries) {
   // Slow enough settings (about a second a frame here) that the signal arrives mid-run.
   const std::string cmd = "exec " + test::shell_quote(HBIL_BINARY) + " " +
                           run_args(test::kRoomPoles + "/frame_####.exr", path("out/out_####.exr"),
-                                   "-q --set steps=96 --set gather_steps=96 --set slices=6") +
+                                   "-q --set steps=96 --set gather_steps=96 --set slices=6 "
+                                   "--log-json " +
+                                       q(path("run.jsonl"))) +
                           " 2> " + q(path("err.txt")) + " < /dev/null";
   const pid_t pid = fork();
   ASSERT_GE(pid, 0);
@@ -538,6 +614,16 @@ TEST_F(Cli, SigtermKeepsFinishedFramesAndRemovesTemporaries) {
                                 : std::to_string(whole) + " frames were written (frames 1 to " +
                                       std::to_string(whole) + ")"))
       << err;
+  // The run log: a line per frame in place, then the interrupted end (143 = 128 + SIGTERM).
+  const auto v = log_lines(path("run.jsonl"));
+  ASSERT_EQ(v.size(), size_t(whole) + 2) << test::read_text(path("run.jsonl"));
+  EXPECT_EQ(v.front()["event"], "start");
+  for (int f = 1; f <= whole; ++f) EXPECT_EQ(v[size_t(f)]["frame"], f);
+  EXPECT_EQ(v.back()["event"], "end");
+  EXPECT_EQ(v.back()["exit"], 143);
+  EXPECT_EQ(v.back()["signal"], SIGTERM);
+  EXPECT_EQ(v.back()["written"], whole);
+  EXPECT_EQ(v.back()["error"], "interrupted");
 }
 
 // A run killed outright (SIGKILL) leaves its temporaries; the next run into the folder

@@ -87,8 +87,11 @@ void import_povray(const ImportOptions& o) {
       const std::string tmp = io::prepare_temporary(final_path, "pov");
       batch.add(tmp, final_path);
       write_frame(tmp, img, o.passes);
-      batch.commit();
-      io::note_frame_written(f.frame);
+      {
+        const io::FrameCommit whole;
+        batch.commit();
+        io::note_frame_written(f.frame);
+      }
       if (!o.quiet) {
         std::string layers;
         for (const auto& l : img.layers) layers += (layers.empty() ? "" : ", ") + l;

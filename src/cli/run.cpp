@@ -1,9 +1,11 @@
 // run.cpp: `hbil run INPUT -o OUTPUT`: the per-frame chain over a sequence.
 #include <tbb/global_control.h>
+#include <tbb/info.h>
 #include <unistd.h>
 
 #include <chrono>
 #include <cstdio>
+#include <ctime>
 #include <iostream>
 #include <memory>
 #include <sstream>
@@ -12,6 +14,7 @@
 #include "hbil/error.h"
 #include "hbil/march.h"
 #include "hbil/reduced.h"
+#include "io/run_log.h"
 #include "pipeline/frame_output.h"
 #include "pipeline/sequence_job.h"
 
@@ -36,7 +39,7 @@ std::string describe_written(const std::vector<int>& w, size_t total) {
 }
 
 struct RunOptions {
-  std::string input, output, frames, cut_frames;
+  std::string input, output, frames, cut_frames, log_json;
   int threads = 0, preroll = 0;
   bool quiet = false, verbose = false, no_display = false;
   std::string overlap = "auto";  // on, off, auto
@@ -45,13 +48,28 @@ struct RunOptions {
   std::string display_out, display_layer, ocio_config, input_space, display, view;
 };
 
+// The time now in UTC, ISO 8601 to the second.
+std::string utc_now() {
+  const std::time_t t = std::time(nullptr);
+  std::tm tm{};
+  gmtime_r(&t, &tm);
+  char text[32];
+  std::strftime(text, sizeof text, "%Y-%m-%dT%H:%M:%SZ", &tm);
+  return text;
+}
+
 std::string join_outputs(const std::vector<std::string>& v) {
   std::string s;
   for (const auto& x : v) s += (s.empty() ? "" : ", ") + x;
   return s;
 }
 
-void run(const RunOptions& o) {
+// What the run log's "end" line counts.
+struct Written {
+  int count = 0;
+};
+
+void run_frames(const RunOptions& o, io::RunLog& log, Written& done) {
   pipeline::configure_heap(0, 0);  // until the first frame's size is known
   const Params requested = o.params.load();
   const pipeline::Overlap overlap = pipeline::parse_overlap(o.overlap);
@@ -100,6 +118,21 @@ void run(const RunOptions& o) {
   if (o.threads > 0)
     threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
                                                     o.threads);
+  const size_t n_threads =
+      o.threads > 0 ? size_t(o.threads) : size_t(tbb::info::default_concurrency());
+  {
+    const std::vector<int>& frames = job.plan().frames;
+    log.write("start", {{"time", utc_now()},
+                        {"hbil", HBIL_VERSION},
+                        {"input", o.input},
+                        {"output", o.output},
+                        {"frames", frames},
+                        {"preroll", job.plan().preroll.size()},
+                        {"outputs", p.outputs},
+                        {"resolution", {first.spec.width, first.spec.height}},
+                        {"threads", n_threads},
+                        {"pid", getpid()}});
+  }
   const bool tty = isatty(STDERR_FILENO);
   const char* clear = tty ? "\r\033[K" : "";
   const size_t nframes = job.plan().frames.size(), npreroll = job.plan().preroll.size();
@@ -113,7 +146,33 @@ void run(const RunOptions& o) {
     std::cerr << "hbil: removed " << stale << " temporary file" << (stale == 1 ? "" : "s")
               << " left by a run that was killed\n";
   pipeline::SequenceJob::Hooks hooks;
-  hooks.deliver = [&](pipeline::FrameResult& r) { output.write(r); };
+  // The frame's log line is written as its files are in place (FrameOutput::write), so that
+  // an interrupt's "end" line never counts a frame the lines before it do not hold.
+  hooks.deliver = [&](pipeline::FrameResult& r) {
+    const auto writing = Clock::now();
+    output.write(r, [&] {
+      ++done.count;
+      if (!log.enabled()) return;
+      const bool history = r.temporal && !r.report.first && !r.report.cut;
+      nlohmann::ordered_json files = {output.path(r.frame)};
+      if (!output.display_path(r.frame).empty()) files.push_back(output.display_path(r.frame));
+      log.write(
+          "frame",
+          {{"frame", r.frame},
+           {"index", r.index},
+           {"of", nframes},
+           {"seconds", std::chrono::duration<double>(Clock::now() - r.started).count()},
+           {"read_ms", r.times.read_ms},
+           {"camera_ms", r.times.camera_ms},
+           {"compute_ms", r.times.compute_ms},
+           {"write_ms", std::chrono::duration<double, std::milli>(Clock::now() - writing).count()},
+           {"camera", r.camera.source},
+           {"cut", r.report.cut ? nlohmann::ordered_json(r.report.cut_reason) : nullptr},
+           {"history", history ? nlohmann::ordered_json(r.report.history) : nullptr},
+           {"reprojection", history ? nlohmann::ordered_json(r.report.reprojection) : nullptr},
+           {"files", files}});
+    });
+  };
   hooks.delivered = [&](const pipeline::FrameResult& r) {
     if (o.verbose) {
       char line[256];
@@ -145,10 +204,12 @@ void run(const RunOptions& o) {
                 << "), history dropped\n";
   };
   // Warnings are printed with --quiet too: they say something about the result.
-  hooks.warning = [&](int, const std::string& message) {
+  hooks.warning = [&](int frame, const std::string& message) {
     std::cerr << clear << "hbil: warning: " << message << "\n";
+    log.write("warning", {{"frame", frame}, {"message", message}});
   };
   hooks.preroll_done = [&](int frame, size_t k, size_t n, double seconds) {
+    log.write("preroll", {{"frame", frame}, {"index", k}, {"of", n}, {"seconds", seconds}});
     if (o.quiet) return;
     char line[256];
     std::snprintf(line, sizeof line, "hbil: frame %d (pre-roll %zu/%zu) %.3f s", frame, k, n,
@@ -166,12 +227,39 @@ void run(const RunOptions& o) {
     throw;
   }
   const double total = std::chrono::duration<double>(Clock::now() - start).count();
+  log.write("end", {{"exit", 0},
+                    {"written", done.count},
+                    {"seconds", total},
+                    {"seconds_per_frame", total / double(nframes + npreroll)}});
   if (!o.quiet) {
     char line[256];
     const std::string pre = npreroll == 0 ? "" : " (+" + std::to_string(npreroll) + " pre-roll)";
     std::snprintf(line, sizeof line, "hbil: %zu frames%s, %.3f s per frame, %.2f s in all", nframes,
                   pre.c_str(), total / double(nframes + npreroll), total);
     std::cerr << (tty ? "\n" : "") << line << "\n";
+  }
+}
+
+void run(const RunOptions& o) {
+  io::RunLog log;
+  if (!o.log_json.empty()) log.open(o.log_json);
+  Written done;
+  // The failure itself is what the caller reports: a log that cannot take its last line
+  // does not replace it.
+  auto end = [&](Exit code, const std::string& message) noexcept {
+    try {
+      log.write("end", {{"exit", int(code)}, {"written", done.count}, {"error", message}});
+    } catch (...) {
+    }
+  };
+  try {
+    run_frames(o, log, done);
+  } catch (const Error& e) {
+    end(e.code(), e.what());
+    throw;
+  } catch (const std::exception& e) {
+    end(Exit::failure, std::string("internal error: ") + e.what());
+    throw;
   }
 }
 
@@ -207,6 +295,10 @@ void add_run(CLI::App& app) {
       ->default_val(0)
       ->check(count_check(kThreadsMeaning));
   cmd->add_flag("-q,--quiet", o->quiet, "no progress lines and no summary");
+  cmd->add_option(
+      "--log-json", o->log_json,
+      "append a JSON line per event to FILE: the run's start, each frame written "
+      "(stage times, camera, cut, history), warnings, and its end with the exit status");
   cmd->add_flag(
       "-v,--verbose", o->verbose,
       "also print the time each frame spends reading, finding the camera, computing and writing");

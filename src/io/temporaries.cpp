@@ -57,12 +57,12 @@ void register_temporary(const std::string& path) noexcept {
   // All slots taken (more files in flight than any command writes): left to a later run.
 }
 
-// Writes `text` and the decimal `v` to standard error (async-signal-safe).
-void say(const char* text) noexcept {
-  const ssize_t r = ::write(STDERR_FILENO, text, std::strlen(text));
+// Writes `text` and the decimal `v` to `fd`, standard error by default (async-signal-safe).
+void say(const char* text, int fd = STDERR_FILENO) noexcept {
+  const ssize_t r = ::write(fd, text, std::strlen(text));
   (void)r;
 }
-void say(int v) noexcept {
+void say(int v, int fd = STDERR_FILENO) noexcept {
   char digits[16];
   int n = 0;
   unsigned u = v < 0 ? 0u - unsigned(v) : unsigned(v);
@@ -73,10 +73,22 @@ void say(int v) noexcept {
   if (v < 0) out[k++] = '-';
   while (n) out[k++] = digits[--n];
   out[k] = 0;
-  say(out);
+  say(out, fd);
 }
 
+std::atomic<int> log_fd{-1};  // RunLog's file, for the "end" line of an interrupted run
+
+// A frame's files being renamed into place (FrameCommit): a signal then waits until the frame
+// is whole, so that it is either all in place and counted, or not at all.
+std::atomic<int> committing{0};
+std::atomic<int> pending_signal{0};
+
 extern "C" void on_interrupt(int sig) {
+  if (committing.load()) {
+    pending_signal.store(sig);
+    // Unless the commit ended meanwhile without seeing it: whoever takes it handles it.
+    if (committing.load() || pending_signal.exchange(0) == 0) return;
+  }
   const int saved = errno;
   for (Slot& s : slots)
     if (s.state.load(std::memory_order_acquire) == 2) ::unlink(s.path);
@@ -97,9 +109,19 @@ extern "C" void on_interrupt(int sig) {
     say(")");
   }
   say("; the frame in progress was not, and its temporaries are removed\n");
+  // The run log's last line, with what the lines before it cannot say.
+  if (const int fd = log_fd.load(); fd >= 0) {
+    say("{\"event\":\"end\",\"exit\":", fd);
+    say(128 + sig, fd);
+    say(",\"written\":", fd);
+    say(n, fd);
+    say(",\"error\":\"interrupted\",\"signal\":", fd);
+    say(sig, fd);
+    say("}\n", fd);
+  }
   errno = saved;
-  // SA_RESETHAND restored the default action: the process ends by this signal once the
-  // handler returns.
+  // The default action again: the process ends by this signal once the handler returns.
+  signal(sig, SIG_DFL);
   raise(sig);
 }
 
@@ -148,7 +170,7 @@ void install_interrupt_cleanup() {
     struct sigaction sa {};
     sa.sa_handler = on_interrupt;
     sigemptyset(&sa.sa_mask);
-    sa.sa_flags = SA_RESETHAND;
+    sa.sa_flags = 0;  // on_interrupt restores the default action itself
     for (int sig : {SIGINT, SIGTERM, SIGHUP}) {
       struct sigaction old {};
       // A signal the caller ignores (nohup, a shell's background job) stays ignored.
@@ -156,6 +178,18 @@ void install_interrupt_cleanup() {
       sigaction(sig, &sa, nullptr);
     }
   });
+}
+
+FrameCommit::FrameCommit() noexcept {
+  committing.fetch_add(1);
+}
+FrameCommit::~FrameCommit() {
+  if (committing.fetch_sub(1) != 1) return;
+  if (const int sig = pending_signal.exchange(0)) on_interrupt(sig);
+}
+
+void set_interrupt_log(int fd) noexcept {
+  log_fd.store(fd);
 }
 
 void note_frame_written(int frame) noexcept {

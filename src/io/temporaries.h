@@ -51,6 +51,20 @@ class Temporary {
 void install_interrupt_cleanup();
 // A frame whose files were all renamed into place: the interrupt line names the frames.
 void note_frame_written(int frame) noexcept;
+// Held while a frame's files are renamed into place and noted as written: an interrupt that
+// arrives meanwhile takes effect when the last FrameCommit ends, so that a frame is never
+// left with its EXR in place and its display image removed, nor in place and not counted.
+class FrameCommit {
+ public:
+  FrameCommit() noexcept;
+  ~FrameCommit();
+  FrameCommit(const FrameCommit&) = delete;
+  FrameCommit& operator=(const FrameCommit&) = delete;
+};
+
+// The file descriptor (open for appending) of `run --log-json`, or -1: an interrupt adds the
+// run's "end" line to it.
+void set_interrupt_log(int fd) noexcept;
 
 // Removes, in `dir`, the temporaries of processes of this host that no longer run; returns
 // how many. A folder that does not exist holds none.

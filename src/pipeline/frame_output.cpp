@@ -103,7 +103,7 @@ FrameOutput::FrameOutput(const OutputSettings& s, const SequenceJob& job)
     for (const std::string& file :
          {out_.path(f), display_pattern_ ? display_pattern_->path(f) : out_.path(f)}) {
       std::string dir = fs::path(file).parent_path().string();
-      if (dir.empty()) dir = ".";
+      if (dir.empty()) dir.assign(1, '.');  // not = ".": GCC 12 -Wrestrict false positive
       if (std::find(folders_.begin(), folders_.end(), dir) == folders_.end())
         folders_.push_back(dir);
     }
@@ -121,7 +121,7 @@ std::string FrameOutput::describe_display() const {
   return display_out_ + " (" + display_layer_ + "): " + display_->describe();
 }
 
-void FrameOutput::write(const FrameResult& r) {
+void FrameOutput::write(const FrameResult& r, const std::function<void()>& committed) {
   const std::string out_path = out_.path(r.frame);
   // The display image is written beside the EXR, on a thread of its own (PNG's deflate runs
   // on one core). Whatever either write leaves goes into the batch before an error is
@@ -155,9 +155,13 @@ void FrameOutput::write(const FrameResult& r) {
     batch_.discard();
     std::rethrow_exception(failed);
   }
-  batch_.commit();  // the EXR, then the display image
-  written_.push_back(r.frame);
-  io::note_frame_written(r.frame);
+  {
+    const io::FrameCommit whole;  // an interrupt waits until the frame is in place and noted
+    batch_.commit();              // the EXR, then the display image
+    io::note_frame_written(r.frame);
+    written_.push_back(r.frame);
+    if (committed) committed();
+  }
 }
 
 }  // namespace hbil::pipeline

@@ -5,6 +5,7 @@
 // leaves the files of the failing frame and of later ones as they were.
 #pragma once
 
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -43,12 +44,19 @@ class FrameOutput {
   // returns how many.
   int remove_stale() const;
   // Writes the frame's files and renames them into place (one frame at a time). A failure
-  // removes what the frame wrote.
-  void write(const FrameResult& r);
+  // removes what the frame wrote. `committed` runs once they are in place, before an
+  // interrupt that arrived meanwhile takes effect (io::FrameCommit), so that what it records
+  // (a log line) is never missing for a frame in place.
+  void write(const FrameResult& r, const std::function<void()>& committed = {});
   // After a failure: removes the output folders the run created if no frame was written.
   void discard() noexcept { batch_.discard(); }
   // The frames written so far, in order.
   const std::vector<int>& written() const { return written_; }
+  // Frame `frame`'s EXR, and its display image ("" without display images).
+  std::string path(int frame) const { return out_.path(frame); }
+  std::string display_path(int frame) const {
+    return display_pattern_ ? display_pattern_->path(frame) : std::string();
+  }
 
  private:
   io::FramePattern out_;
