@@ -64,12 +64,8 @@ std::string join_outputs(const std::vector<std::string>& v) {
   return s;
 }
 
-// What the run log's "end" line counts.
-struct Written {
-  int count = 0;
-};
-
-void run_frames(const RunOptions& o, io::RunLog& log, Written& done) {
+// `written`: the frames in place so far, for the run log's "end" line.
+void run_frames(const RunOptions& o, io::RunLog& log, int& written) {
   pipeline::configure_heap(0, 0);  // until the first frame's size is known
   const Params requested = o.params.load();
   const pipeline::Overlap overlap = pipeline::parse_overlap(o.overlap);
@@ -151,10 +147,10 @@ void run_frames(const RunOptions& o, io::RunLog& log, Written& done) {
   hooks.deliver = [&](pipeline::FrameResult& r) {
     const auto writing = Clock::now();
     output.write(r, [&] {
-      ++done.count;
+      ++written;
       if (!log.enabled()) return;
       const bool history = r.temporal && !r.report.first && !r.report.cut;
-      nlohmann::ordered_json files = {output.path(r.frame)};
+      auto files = nlohmann::ordered_json::array({output.path(r.frame)});
       if (!output.display_path(r.frame).empty()) files.push_back(output.display_path(r.frame));
       log.write(
           "frame",
@@ -228,7 +224,7 @@ void run_frames(const RunOptions& o, io::RunLog& log, Written& done) {
   }
   const double total = std::chrono::duration<double>(Clock::now() - start).count();
   log.write("end", {{"exit", 0},
-                    {"written", done.count},
+                    {"written", written},
                     {"seconds", total},
                     {"seconds_per_frame", total / double(nframes + npreroll)}});
   if (!o.quiet) {
@@ -243,17 +239,17 @@ void run_frames(const RunOptions& o, io::RunLog& log, Written& done) {
 void run(const RunOptions& o) {
   io::RunLog log;
   if (!o.log_json.empty()) log.open(o.log_json);
-  Written done;
+  int written = 0;
   // The failure itself is what the caller reports: a log that cannot take its last line
   // does not replace it.
   auto end = [&](Exit code, const std::string& message) noexcept {
     try {
-      log.write("end", {{"exit", int(code)}, {"written", done.count}, {"error", message}});
+      log.write("end", {{"exit", int(code)}, {"written", written}, {"error", message}});
     } catch (...) {
     }
   };
   try {
-    run_frames(o, log, done);
+    run_frames(o, log, written);
   } catch (const Error& e) {
     end(e.code(), e.what());
     throw;

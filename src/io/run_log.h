@@ -1,7 +1,7 @@
 // run_log.h: `hbil run --log-json FILE`, a log that machines read: one JSON object per line
 // (JSON Lines), appended to FILE and flushed line by line, so that a farm can follow a task
-// while it runs and a rerun adds to what an earlier run logged. man hbil, "LOG" gives the
-// events and their keys.
+// while it runs and a rerun adds to what an earlier run logged. man hbil, --log-json, gives
+// the events and their keys.
 #pragma once
 
 #include <cstdio>
@@ -23,7 +23,6 @@ class RunLog {
   // (temporaries.h).
   void open(const std::string& path);
   bool enabled() const { return file_ != nullptr; }
-  const std::string& path() const { return path_; }
   // Adds `event` (an object; its "event" key first) as one line; callable from any thread. A
   // failing write is an Error(Exit::output) naming the file.
   void write(const std::string& event, nlohmann::ordered_json fields);
