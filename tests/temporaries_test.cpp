@@ -17,6 +17,23 @@ namespace {
 
 namespace fs = std::filesystem;
 
+// Runs `body` in a child process with its standard error sent to `err`, and checks that the
+// child ended by signal `sig`, not by reaching the end of `body`.
+template <class Body>
+void expect_child_ended_by(int sig, const std::string& err, Body body) {
+  const pid_t pid = fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    if (!freopen(err.c_str(), "w", stderr)) _exit(126);
+    body();
+    _exit(0);
+  }
+  int status = 0;
+  ASSERT_EQ(waitpid(pid, &status, 0), pid);
+  ASSERT_TRUE(WIFSIGNALED(status)) << "exit " << WEXITSTATUS(status);
+  EXPECT_EQ(WTERMSIG(status), sig);
+}
+
 // A SIGTERM raised while a frame is being committed takes effect when the commit ends: the
 // code inside the FrameCommit runs to its end, the code after it never runs, the process
 // ends by SIGTERM, and the interrupt line counts the frame noted inside.
@@ -25,10 +42,7 @@ TEST(FrameCommit, ASignalDuringTheCommitWaitsForItsEnd) {
   const std::string inside = (dir.path() / "inside").string();
   const std::string after = (dir.path() / "after").string();
   const std::string err = (dir.path() / "err.txt").string();
-  const pid_t pid = fork();
-  ASSERT_GE(pid, 0);
-  if (pid == 0) {
-    if (!freopen(err.c_str(), "w", stderr)) _exit(126);
+  expect_child_ended_by(SIGTERM, err, [&] {
     io::install_interrupt_cleanup();
     {
       const io::FrameCommit whole;
@@ -37,12 +51,7 @@ TEST(FrameCommit, ASignalDuringTheCommitWaitsForItsEnd) {
       test::write_text(inside, "the commit ran on\n");
     }
     test::write_text(after, "after the commit\n");
-    _exit(0);
-  }
-  int status = 0;
-  ASSERT_EQ(waitpid(pid, &status, 0), pid);
-  ASSERT_TRUE(WIFSIGNALED(status)) << "exit " << WEXITSTATUS(status);
-  EXPECT_EQ(WTERMSIG(status), SIGTERM);
+  });
   EXPECT_TRUE(fs::exists(inside)) << "the signal cut the commit short";
   EXPECT_FALSE(fs::exists(after)) << "the signal was lost";
   const std::string text = test::read_text(err);
@@ -57,22 +66,14 @@ TEST(FrameCommit, ASignalOutsideACommitActsAtOnceAndEndsTheLog) {
   test::TempDir dir{test::test_name()};
   const std::string log = (dir.path() / "run.jsonl").string();
   const std::string after = (dir.path() / "after").string();
-  const pid_t pid = fork();
-  ASSERT_GE(pid, 0);
-  if (pid == 0) {
-    if (!freopen("/dev/null", "w", stderr)) _exit(126);
+  expect_child_ended_by(SIGINT, "/dev/null", [&] {
     std::FILE* f = std::fopen(log.c_str(), "a");
     if (!f) _exit(125);
     io::set_interrupt_log(fileno(f));
     io::install_interrupt_cleanup();
     raise(SIGINT);
     test::write_text(after, "after the signal\n");
-    _exit(0);
-  }
-  int status = 0;
-  ASSERT_EQ(waitpid(pid, &status, 0), pid);
-  ASSERT_TRUE(WIFSIGNALED(status)) << "exit " << WEXITSTATUS(status);
-  EXPECT_EQ(WTERMSIG(status), SIGINT);
+  });
   EXPECT_FALSE(fs::exists(after));
   EXPECT_EQ(test::read_text(log),
             "{\"event\":\"end\",\"exit\":130,\"written\":0,\"error\":\"interrupted\","
