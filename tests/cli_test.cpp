@@ -730,6 +730,103 @@ TEST_F(Cli, GapInTheSequenceDropsTheHistory) {
   EXPECT_GT(history("out/twos_0005.exr").second, 2.0) << "frame 5 accumulates 1 and 3";
 }
 
+// oiiotool's frame lists: a step keeps the history (the sequence's step is the list's), a
+// list with a hole drops it at the hole, negative frames are frames.
+TEST_F(Cli, FrameListsInOiiotoolSyntax) {
+  const std::string in = test::kRoomPoles + "/frame_####.exr";
+  const RunResult twos = hbil(run_args(
+      in, path("out/x_####.exr"), "--no-display --frames 1-5x2 --log-json " + q(path("x.jsonl"))));
+  ASSERT_EQ(twos.code, 0) << twos.err;
+  EXPECT_FALSE(contains(twos.err, "missing")) << twos.err;
+  EXPECT_EQ(log_lines(path("x.jsonl")).front()["frames"], nlohmann::json::array({1, 3, 5}));
+  for (int f : {1, 3, 5}) EXPECT_TRUE(fs::exists(path("out/x_000" + std::to_string(f) + ".exr")));
+  for (int f : {2, 4}) EXPECT_FALSE(fs::exists(path("out/x_000" + std::to_string(f) + ".exr")));
+
+  const RunResult list = hbil(run_args(in, path("out/l_####.exr"), "--no-display --frames 1,3-4"));
+  ASSERT_EQ(list.code, 0) << list.err;
+  EXPECT_TRUE(contains(list.err, "hbil: frame 3: cut (frame 2 missing), history dropped"))
+      << list.err;
+  EXPECT_FALSE(fs::exists(path("out/l_0002.exr")));
+
+  // '@' pads as oiiotool's does; frame -1 is a frame of the pattern.
+  fs::create_symlink(sample(1), path("in/neg_-001.exr"));
+  fs::create_symlink(sample(1, ".camera.json"), path("in/neg_-001.camera.json"));
+  const RunResult neg =
+      hbil(run_args(path("in/neg_@@@@.exr"), path("out/n_@@@@.exr"), "--no-display --frames -1"));
+  ASSERT_EQ(neg.code, 0) << neg.err;
+  EXPECT_TRUE(fs::exists(path("out/n_-001.exr")));
+  expect_failure(run_args(in, path("out/out_####.exr"), "--frames 1-4x0"), Exit::usage,
+                 {"--frames: \"1-4x0\"", "step", "1-100x2"});
+}
+
+// --skip-existing: a resumed run leaves the frames this job made complete, makes the others
+// with the bytes an uninterrupted run gives them, and redoes a frame that is cut short, made
+// by other settings, or made from an input that changed since.
+TEST_F(Cli, SkipExistingResumesWithTheBytesOfAnUninterruptedRun) {
+  for (int n = 1; n <= 4; ++n) copy_frame(n);
+  const std::string in = path("in/frame_####.exr");
+  ASSERT_EQ(hbil(run_args(in, path("whole/f_####.exr"), "-q")).code, 0);
+  const auto whole = snapshot(path("whole"));
+  ASSERT_EQ(whole.size(), 8u);  // EXR and PNG of 4 frames
+
+  // Killed after frame 2: frame 3's EXR and frame 4's PNG are missing, frame 2's EXR is cut
+  // short; frame 1 is in place, with a time stamp that must not change.
+  fs::copy(path("whole"), path("resumed"));
+  fs::remove(path("resumed/f_0003.exr"));
+  fs::remove(path("resumed/f_0004.png"));
+  const std::string f2 = path("resumed/f_0002.exr");
+  fs::resize_file(f2, fs::file_size(f2) / 2);
+  const auto stamp = fs::last_write_time(path("resumed/f_0001.exr"));
+  const std::string log = path("resume.jsonl");
+  const RunResult r =
+      hbil(run_args(in, path("resumed/f_####.exr"), "--skip-existing --log-json " + q(log)));
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(contains(r.err, "skip-existing: frame 1 done by this job, not written again"))
+      << r.err;
+  EXPECT_TRUE(contains(r.err, "frame 1 (done, computed for the history)")) << r.err;
+  EXPECT_EQ(snapshot(path("resumed")), whole) << "a resumed run made other bytes";
+  EXPECT_EQ(fs::last_write_time(path("resumed/f_0001.exr")), stamp) << "frame 1 was written again";
+  auto v = log_lines(log);
+  ASSERT_GE(v.size(), 3u);
+  EXPECT_EQ(v[1]["event"], "skip");
+  EXPECT_EQ(v[1]["frames"], nlohmann::json::array({1}));
+  EXPECT_EQ(v.back()["written"], 3);
+  EXPECT_EQ(v.back()["skipped"], 1);
+
+  // Everything done: nothing is computed or written.
+  const RunResult again = hbil(run_args(in, path("resumed/f_####.exr"), "--skip-existing"));
+  ASSERT_EQ(again.code, 0) << again.err;
+  EXPECT_TRUE(contains(again.err, "frames 1-4 done by this job")) << again.err;
+  EXPECT_FALSE(contains(again.err, "computed for the history")) << again.err;
+  EXPECT_EQ(snapshot(path("resumed")), whole);
+
+  // Other settings: every frame is made again.
+  const RunResult other =
+      hbil(run_args(in, path("resumed/f_####.exr"), "--skip-existing --set steps=6"));
+  ASSERT_EQ(other.code, 0) << other.err;
+  EXPECT_TRUE(contains(other.err, "no frame is done yet")) << other.err;
+  EXPECT_TRUE(contains(other.err, "made by other settings or from other inputs")) << other.err;
+  EXPECT_NE(snapshot(path("resumed")), whole);
+
+  // Back to the first settings, then frame 3's input changes: frames 3 and 4 (whose history
+  // it shapes) are made again, 1 and 2 are not.
+  ASSERT_EQ(hbil(run_args(in, path("resumed/f_####.exr"), "-q")).code, 0);
+  fs::last_write_time(in_frame(3), fs::last_write_time(in_frame(3)) + std::chrono::seconds(5));
+  const RunResult changed = hbil(run_args(in, path("resumed/f_####.exr"), "--skip-existing"));
+  ASSERT_EQ(changed.code, 0) << changed.err;
+  EXPECT_TRUE(contains(changed.err, "frames 1-2 done by this job")) << changed.err;
+
+  // Without a temporal chain the done frames are not computed.
+  const std::string flat = "--set temporal=false --no-display ";
+  ASSERT_EQ(hbil(run_args(in, path("flat/f_####.exr"), flat + "-q")).code, 0);
+  fs::remove(path("flat/f_0002.exr"));
+  const RunResult f = hbil(run_args(in, path("flat/f_####.exr"), flat + "--skip-existing"));
+  ASSERT_EQ(f.code, 0) << f.err;
+  EXPECT_TRUE(contains(f.err, "frames 1, 3-4 done by this job")) << f.err;
+  EXPECT_TRUE(contains(f.err, "hbil: frame 2 (2/4)")) << f.err;
+  EXPECT_FALSE(contains(f.err, "computed for the history")) << f.err;
+}
+
 // A zero-length normal on geometry is taken as background: the run succeeds, every output
 // is finite, and one warning per frame gives the count, the first pixel and the file.
 TEST_F(Cli, ZeroLengthNormalsWarnAndAreBackground) {
@@ -1031,7 +1128,8 @@ TEST_F(Cli, PresetDumpAppliesSet) {
 TEST_F(Cli, ManPageDocumentsEveryOption) {
   const std::string man = test::read_text(fs::path(HBIL_SOURCE_DIR) / "man/hbil.1");
   const std::regex option("--([a-z][a-z0-9-]*)");
-  for (const char* command : {"run", "info", "compare", "preset", "import-povray"}) {
+  for (const char* command : {"run", "info", "compare", "preset", "import-povray", "bench", "tune",
+                              "farm plan", "farm run", "farm check", "farm slurm"}) {
     const RunResult r = hbil(std::string(command) + " --help");
     ASSERT_EQ(r.code, 0) << command;
     int found = 0;

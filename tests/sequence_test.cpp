@@ -1,4 +1,4 @@
-// sequence_test.cpp: frame patterns, existing frames on disk, --frames ranges, frame
+// sequence_test.cpp: frame patterns, existing frames on disk, frame lists (--frames), frame
 // numbers in file names.
 #include "io/sequence.h"
 
@@ -60,6 +60,14 @@ TEST(FramePattern, HashesPadToTheirCount) {
   EXPECT_EQ(FramePattern("f#.exr").path(42), "f42.exr");
 }
 
+TEST(FramePattern, AtSignsPadToTheirCount) {
+  EXPECT_EQ(FramePattern("f_@@@@.exr").path(7), "f_0007.exr");
+  EXPECT_EQ(FramePattern("f_@@@.exr").pad(), 3);
+  EXPECT_EQ(FramePattern("f_@.exr").path(42), "f_42.exr");
+  EXPECT_EQ(FramePattern("f_@@@@.exr").path(-2), "f_-002.exr");
+  expect_usage_error("f_##@@.exr", "more than one");
+}
+
 TEST(FramePattern, PrintfStyle) {
   EXPECT_EQ(FramePattern("frame_%04d.exr").path(7), "frame_0007.exr");
   EXPECT_EQ(FramePattern("frame_%04d.exr").pad(), 4);
@@ -94,13 +102,17 @@ TEST(FramePattern, ExistingFramesMatchPaddingRules) {
                         "frame_001.exr",    // 3 digits: not a 4-pad name
                         "frame_00011.exr",  // 5 digits with a leading zero: not written so
                         "frame_0003.exr.tmp", "frame_0004.EXR", "other_0005.exr", "frame_abcd.exr",
-                        "frame_.exr", "xframe_0006.exr"})
+                        "frame_.exr", "xframe_0006.exr", "frame_-001.exr", "frame_-0001.exr",
+                        "frame_--01.exr", "frame_-.exr", "frame_-12345.exr"})
     dir.touch(f);
   fs::create_directory(dir.str() + "/frame_0007.exr");  // a directory is not a frame
   const FramePattern p(dir.str() + "/frame_####.exr");
-  EXPECT_EQ(p.existing_frames(), (std::vector<int>{1, 2, 10, 10000}));
+  // Negative frames as printf("%04d") writes them: "-001", not "-0001".
+  EXPECT_EQ(p.existing_frames(), (std::vector<int>{-12345, -1, 1, 2, 10, 10000}));
   EXPECT_EQ(FramePattern(dir.str() + "/frame_%04d.exr").existing_frames(),
-            (std::vector<int>{1, 2, 10, 10000}));
+            (std::vector<int>{-12345, -1, 1, 2, 10, 10000}));
+  EXPECT_EQ(FramePattern(dir.str() + "/frame_@@@@.exr").existing_frames(),
+            (std::vector<int>{-12345, -1, 1, 2, 10, 10000}));
 }
 
 TEST(FramePattern, ExistingFramesUnpadded) {
@@ -138,26 +150,72 @@ TEST(FramePattern, ExistingFramesRelativeToWorkingDirectory) {
   EXPECT_EQ(frames, std::vector<int>{3});
 }
 
-TEST(FrameRange, Parses) {
-  EXPECT_EQ(parse_frame_range("12").first, 12);
-  EXPECT_EQ(parse_frame_range("12").last, 12);
-  EXPECT_EQ(parse_frame_range("1-8").first, 1);
-  EXPECT_EQ(parse_frame_range("1-8").last, 8);
-  EXPECT_EQ(parse_frame_range("0-0").last, 0);
-  EXPECT_EQ(parse_frame_range("0010-0020").first, 10);
+TEST(FrameList, OiiotoolSyntax) {
+  using V = std::vector<int>;
+  EXPECT_EQ(parse_frame_list("12"), V{12});
+  EXPECT_EQ(parse_frame_list("1-8"), (V{1, 2, 3, 4, 5, 6, 7, 8}));
+  EXPECT_EQ(parse_frame_list("0-0"), V{0});
+  EXPECT_EQ(parse_frame_list("0010-0012"), (V{10, 11, 12}));
+  EXPECT_EQ(parse_frame_list("1-9x2"), (V{1, 3, 5, 7, 9}));
+  EXPECT_EQ(parse_frame_list("1-10x3"), (V{1, 4, 7, 10}));
+  EXPECT_EQ(parse_frame_list("1-10y3"), (V{2, 3, 5, 6, 8, 9}));  // what x3 leaves out
+  EXPECT_EQ(parse_frame_list("1,3,5-8"), (V{1, 3, 5, 6, 7, 8}));
+  EXPECT_EQ(parse_frame_list("-3--1"), (V{-3, -2, -1}));
+  EXPECT_EQ(parse_frame_list("-2-2"), (V{-2, -1, 0, 1, 2}));
+  EXPECT_EQ(parse_frame_list("-5"), V{-5});
+  // Either direction, repeats once: the frames are computed in ascending order.
+  EXPECT_EQ(parse_frame_list("4-1"), (V{1, 2, 3, 4}));
+  EXPECT_EQ(parse_frame_list("3,1-3,2"), (V{1, 2, 3}));
+  EXPECT_EQ(parse_frame_list("999999990-999999999x9"), (V{999999990, 999999999}));
+  EXPECT_EQ(parse_frame_list("-999999999"), V{-999999999});
 }
 
-TEST(FrameRange, MalformedRangesAreUsageErrors) {
-  for (const char* bad : {"", "-", "8-1", "-3", "1-", "a", "1-8-9", " 1-8", "1..8", "1,3",
-                          "99999999999", "1-99999999999", "-3--1", "+4"}) {
+TEST(FrameList, MalformedListsAreUsageErrors) {
+  for (const char* bad : {"",
+                          "-",
+                          "1-",
+                          "a",
+                          "1-8-9",
+                          " 1-8",
+                          "1-8 ",
+                          "1..8",
+                          "1,,3",
+                          ",1",
+                          "1,",
+                          "99999999999",
+                          "1-99999999999",
+                          "+4",
+                          "1-8x0",
+                          "1-8x",
+                          "3x2",
+                          "1-8x-2",
+                          "1-8z2",
+                          "0-1000000",
+                          "1-2y1",
+                          "1;2",
+                          "1000000000",
+                          "-1000000000-0",
+                          "-2147483648"}) {
     try {
-      parse_frame_range(bad);
+      parse_frame_list(bad);
       ADD_FAILURE() << "no error for \"" << bad << "\"";
     } catch (const Error& e) {
       EXPECT_EQ(int(e.code()), int(Exit::usage));
-      EXPECT_EQ(std::string(e.what()).rfind("--frames: ", 0), 0u) << e.what();
+      EXPECT_EQ(std::string(e.what()).rfind("--frames: \"" + std::string(bad) + "\": ", 0), 0u)
+          << e.what();
     }
   }
+  try {
+    parse_frame_list("3,x", "--cut-frames");
+    ADD_FAILURE() << "no error for 3,x";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("--cut-frames: \"3,x\": \"x\" is not a frame"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_EQ(parse_frame_list("0-999999").size(), size_t(kMaxFrames));  // the limit itself
+  // A very long item is refused, not matched (std::regex recurses per character).
+  EXPECT_THROW(parse_frame_list(std::string(1000000, '1')), Error);
 }
 
 TEST(FrameNumberFromName, LastDigitGroupOfTheFileName) {

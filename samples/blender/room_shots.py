@@ -4,11 +4,15 @@
         --shot static --out samples/room_static --mode main --samples 256 --frames 1-6
     blender -b --factory-startup --python samples/blender/room_shots.py -- \
         --shot cut --out samples/room_cut --mode main --samples 256 --frames 1-6
+    blender -b --factory-startup --python samples/blender/room_shots.py -- \
+        --shot long --out /tmp/room_long --mode main --samples 16 --frames 1-64
 
 static: the camera holds room_poles' frame-1 pose on every frame (with the fixed seed the
         Cycles frames are identical, so any change between hbil's frames is its own flicker).
 cut:    frames 1-3 dolly slowly as in room_poles; frame 4 cuts hard to the opposite corner,
         looking back at the window wall, and frames 4-6 dolly slowly there.
+long:   64 frames dollying and panning slowly from room_poles' frame-1 pose towards the
+        poles (1.6 cm and 0.5 degrees a frame), for farm chunks and their seams.
 Same scene, lights and render settings as room_poles.py (hbil_common.py).
 """
 import math
@@ -19,7 +23,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import hbil_common as H  # noqa: E402
 import room_poles  # noqa: E402
 
-SHOT = H.pop_choice("--shot", ("static", "cut"))
+SHOT = H.pop_choice("--shot", ("static", "cut", "long"))
 
 
 def build(scene):
@@ -30,6 +34,11 @@ def build(scene):
              rotation_euler=(math.radians(74.0), 0.0, math.radians(16.0)))
     if SHOT == "static":
         H.key(cam, 1, **a)
+        return
+    if SHOT == "long":
+        H.key(cam, 1, **a)
+        H.key(cam, 64, location=(-0.30, -1.60, 1.55),
+              rotation_euler=(math.radians(75.0), 0.0, math.radians(-16.0)))
         return
     H.key(cam, 1, **a)
     H.key(cam, 3, location=(0.60, -1.80, 1.60),

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "hbil/params.h"
+#include "pipeline/frame_output.h"
 
 namespace hbil::cli {
 
@@ -47,7 +48,24 @@ CLI::Validator count_check(const std::string& meaning, int least = 0);
 CLI::Validator amount_check(const std::string& meaning);
 inline const std::string kThreadsMeaning = "0 (all cores) or a positive count";
 
+// What a `run` command line asks for, read without running it: `args` are run's options after
+// INPUT. Those a farm plan sets itself (--frames, --preroll, --cut-frames, --threads,
+// --skip-existing, --log-json) are refused. Throws Error(Exit::usage, "<context>: ..."), or
+// Error(Exit::preset) for the parameters.
+struct RunRequest {
+  pipeline::OutputSettings output;
+  Params params;
+};
+RunRequest read_run_request(const std::string& input, const std::vector<std::string>& args,
+                            const std::string& context);
+
+// `hbil run INPUT args...`, as if given on the command line (CLI11's errors are
+// Error(Exit::usage, "<context>: ...")).
+void run_command(const std::string& input, const std::vector<std::string>& args,
+                 const std::string& context);
+
 void add_run(CLI::App& app);
+void add_farm(CLI::App& app);
 void add_bench(CLI::App& app);
 void add_tune(CLI::App& app);
 void add_info(CLI::App& app);

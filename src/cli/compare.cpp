@@ -42,8 +42,7 @@ void compare(const Options& o) {
   std::vector<int> frames;
   if (tp.is_sequence()) {
     if (!o.frames.empty()) {
-      const auto r = io::parse_frame_range(o.frames);
-      for (int f = r.first; f <= r.last; ++f) frames.push_back(f);
+      frames = io::parse_frame_list(o.frames);
     } else {
       frames = tp.existing_frames();
     }
@@ -141,8 +140,9 @@ void add_compare(CLI::App& app) {
   cmd->add_option("--mask", o->mask,
                   "valid pixels: auto (reference depth, else alpha), none, or a channel name")
       ->capture_default_str();
-  cmd->add_option("--frames", o->frames,
-                  "frame range A-B of the patterns (default: every TEST frame found)");
+  cmd->add_option(
+      "--frames", o->frames,
+      "frames of the patterns: N, A-B, A-BxSTEP, 1,3,5-8 (default: every TEST frame found)");
   cmd->add_option("--background-depth", o->background_depth,
                   "depth at or beyond which --mask auto drops a pixel")
       ->capture_default_str();

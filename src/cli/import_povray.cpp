@@ -3,6 +3,7 @@
 // (see io/povray.h), so that `hbil run` reads a POV-Ray sequence as it reads a Cycles one.
 #include <OpenImageIO/imageio.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <iostream>
 #include <map>
@@ -49,10 +50,10 @@ void import_povray(const ImportOptions& o) {
   io::FramePattern out(o.out);
   std::vector<io::PovrayFrameFiles> frames = io::find_povray_frames(o.passes, o.reference_dir);
   if (!o.frames.empty()) {
-    const io::FrameRange r = io::parse_frame_range(o.frames);
+    const std::vector<int> wanted = io::parse_frame_list(o.frames);
     std::vector<io::PovrayFrameFiles> kept;
     for (auto& f : frames)
-      if (f.frame >= r.first && f.frame <= r.last) kept.push_back(std::move(f));
+      if (std::binary_search(wanted.begin(), wanted.end(), f.frame)) kept.push_back(std::move(f));
     if (kept.empty()) throw Error(Exit::input, o.passes + ": no depth pass of frames " + o.frames);
     frames = std::move(kept);
   }
@@ -121,7 +122,8 @@ void add_import_povray(CLI::App& app) {
       ->required();
   cmd->add_option("-o,--output", o->out, "output EXR frame pattern, e.g. shot/frame_####.exr")
       ->required();
-  cmd->add_option("--frames", o->frames, "frame range A-B to import (default: all found)");
+  cmd->add_option("--frames", o->frames,
+                  "frames to import: N, A-B, A-BxSTEP, 1,3,5-8 (default: all found)");
   cmd->add_option("--reference-dir", o->reference_dir,
                   "take reference<N>.exr from this folder instead (another radiosity render)");
   cmd->add_option("--view-layer", o->view_layer, "view layer name of the written channels")

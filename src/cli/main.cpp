@@ -14,6 +14,7 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   app.set_version_flag("--version", "hbil " HBIL_VERSION);
   hbil::cli::add_run(app);
+  hbil::cli::add_farm(app);
   hbil::cli::add_bench(app);
   hbil::cli::add_tune(app);
   hbil::cli::add_info(app);
@@ -23,11 +24,15 @@ int main(int argc, char** argv) {
   // Every --help names the manual and the exit codes.
   const std::string footer =
       "\nExit codes: 0 done, 1 internal error, 2 usage, 3 input missing or unreadable, 4 "
-      "pass missing, 5 bad data, 6 no usable camera, 7 preset, 8 output cannot be written.\n"
+      "pass missing, 5 bad data, 6 no usable camera, 7 preset, 8 output cannot be written, 9 "
+      "farm check found frames not done.\n"
       "Manual (every option, layer and exit code): man hbil, or man -l man/hbil.1 in the "
       "source tree.";
   app.footer(footer);
-  for (CLI::App* sub : app.get_subcommands({})) sub->footer(footer);
+  for (CLI::App* sub : app.get_subcommands({})) {
+    sub->footer(footer);
+    for (CLI::App* subsub : sub->get_subcommands({})) subsub->footer(footer);
+  }
   // OIIO's own thread pool is not needed: hbil parallelises with TBB.
   // OIIO::attribute("threads", 1);
   try {

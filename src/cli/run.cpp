@@ -8,6 +8,7 @@
 #include <ctime>
 #include <iostream>
 #include <memory>
+#include <set>
 #include <sstream>
 
 #include "cli/commands.h"
@@ -22,9 +23,8 @@ namespace hbil::cli {
 
 namespace {
 
-// "frames 1-3, 5 were written (4 of 8); the others were not", or "no frame was written".
-std::string describe_written(const std::vector<int>& w, size_t total) {
-  if (w.empty()) return "no frame was written";
+// "1-3, 5" for {1, 2, 3, 5}.
+std::string frame_list(const std::vector<int>& w) {
   std::string list;
   for (size_t a = 0; a < w.size();) {
     size_t b = a;
@@ -33,7 +33,13 @@ std::string describe_written(const std::vector<int>& w, size_t total) {
     if (b > a) list += "-" + std::to_string(w[b]);
     a = b + 1;
   }
-  return std::string(w.size() == 1 ? "frame " : "frames ") + list +
+  return list;
+}
+
+// "frames 1-3, 5 were written (4 of 8); the others were not", or "no frame was written".
+std::string describe_written(const std::vector<int>& w, size_t total) {
+  if (w.empty()) return "no frame was written";
+  return std::string(w.size() == 1 ? "frame " : "frames ") + frame_list(w) +
          (w.size() == 1 ? " was" : " were") + " written (" + std::to_string(w.size()) + " of " +
          std::to_string(total) + "); the others were not";
 }
@@ -41,7 +47,7 @@ std::string describe_written(const std::vector<int>& w, size_t total) {
 struct RunOptions {
   std::string input, output, frames, cut_frames, log_json;
   int threads = 0, preroll = 0;
-  bool quiet = false, verbose = false, no_display = false;
+  bool quiet = false, verbose = false, no_display = false, skip_existing = false;
   std::string overlap = "auto";  // on, off, auto
   ParamOptions params;
   // Display images through OpenColorIO.
@@ -141,6 +147,30 @@ void run_frames(const RunOptions& o, io::RunLog& log, int& written) {
   if (const int stale = output.remove_stale(); stale > 0 && !o.quiet)
     std::cerr << "hbil: removed " << stale << " temporary file" << (stale == 1 ? "" : "s")
               << " left by a run that was killed\n";
+  // --skip-existing: the frames whose files this job already made, complete.
+  std::set<int> done;
+  if (o.skip_existing) {
+    std::vector<int> skipped;
+    std::string why;
+    for (int f : job.plan().frames) {
+      std::string why_f;
+      if (output.done(f, &why_f)) {
+        done.insert(f);
+        skipped.push_back(f);
+      } else if (why.empty()) {
+        why = why_f;
+      }
+    }
+    log.write("skip", {{"frames", skipped}});
+    if (!o.quiet) {
+      if (skipped.empty())
+        std::cerr << "hbil: skip-existing: no frame is done yet (" << why << ")\n";
+      else
+        std::cerr << "hbil: skip-existing: " << (skipped.size() == 1 ? "frame " : "frames ")
+                  << frame_list(skipped) << " done by this job, not written again"
+                  << (skipped.size() < nframes ? "; the first to make: " + why : "") << "\n";
+    }
+  }
   pipeline::SequenceJob::Hooks hooks;
   // The frame's log line is written as its files are in place (FrameOutput::write), so that
   // an interrupt's "end" line never counts a frame the lines before it do not hold.
@@ -212,26 +242,39 @@ void run_frames(const RunOptions& o, io::RunLog& log, int& written) {
                   seconds);
     std::cerr << clear << line << (tty ? "" : "\n") << std::flush;
   };
+  hooks.history_only = [&](int frame, double seconds) {
+    log.write("history", {{"frame", frame}, {"seconds", seconds}});
+    if (o.quiet) return;
+    char line[256];
+    std::snprintf(line, sizeof line, "hbil: frame %d (done, computed for the history) %.3f s",
+                  frame, seconds);
+    std::cerr << clear << line << (tty ? "" : "\n") << std::flush;
+  };
   try {
-    job.run(hooks, overlap);
+    job.run(hooks, overlap, nullptr, done);
   } catch (...) {
     if (tty && !o.quiet) std::cerr << "\n";
     output.discard();
     // Printed with --quiet too: which frames a rerun still needs.
     const std::vector<int>& w = output.written();
-    std::cerr << "hbil: " << describe_written(w, nframes) << "\n";
+    std::cerr << "hbil: " << describe_written(w, nframes - done.size())
+              << (done.empty() ? "" : " (" + std::to_string(done.size()) + " were done before)")
+              << "\n";
     throw;
   }
   const double total = std::chrono::duration<double>(Clock::now() - start).count();
   log.write("end", {{"exit", 0},
                     {"written", written},
+                    {"skipped", done.size()},
                     {"seconds", total},
                     {"seconds_per_frame", total / double(nframes + npreroll)}});
   if (!o.quiet) {
     char line[256];
     const std::string pre = npreroll == 0 ? "" : " (+" + std::to_string(npreroll) + " pre-roll)";
-    std::snprintf(line, sizeof line, "hbil: %zu frames%s, %.3f s per frame, %.2f s in all", nframes,
-                  pre.c_str(), total / double(nframes + npreroll), total);
+    const std::string skipped =
+        done.empty() ? "" : " (" + std::to_string(done.size()) + " done before, not written)";
+    std::snprintf(line, sizeof line, "hbil: %zu frames%s%s, %.3f s per frame, %.2f s in all",
+                  nframes, pre.c_str(), skipped.c_str(), total / double(nframes + npreroll), total);
     std::cerr << (tty ? "\n" : "") << line << "\n";
   }
 }
@@ -259,20 +302,18 @@ void run(const RunOptions& o) {
   }
 }
 
-}  // namespace
-
-void add_run(CLI::App& app) {
-  auto o = std::make_shared<RunOptions>();
-  CLI::App* cmd =
-      app.add_subcommand("run", "compute the requested layers for every frame of a sequence");
+// The options of `run` on `cmd`, into `o`.
+void add_run_options(CLI::App* cmd, const std::shared_ptr<RunOptions>& o) {
   cmd->add_option("INPUT", o->input,
                   "input EXR: a frame pattern (frame_####.exr, frame_%04d.exr) or one file")
       ->required();
   cmd->add_option("-o,--output", o->output,
                   "output EXR: a frame pattern or one file; folders are created")
       ->required();
-  cmd->add_option("--frames", o->frames,
-                  "frame range A-B, or one frame N (default: every frame found)");
+  cmd->add_option(
+      "--frames", o->frames,
+      "frames: N, A-B, A-BxSTEP (every STEP-th), lists such as 1,3,5-8, negative frames "
+      "(default: every frame found)");
   cmd->add_option("--preroll", o->preroll,
                   "temporal chain: compute the P frames before the first one first (not written), "
                   "so that a farm chunk starts with history")
@@ -290,6 +331,10 @@ void add_run(CLI::App& app) {
                   "worker threads (0 = all cores); results are identical for any count")
       ->default_val(0)
       ->check(count_check(kThreadsMeaning));
+  cmd->add_flag("--skip-existing", o->skip_existing,
+                "resume: leave the frames whose files this job already made, complete (same "
+                "preset, same inputs); a temporal chain still passes through them, so the frames "
+                "made are those an uninterrupted run makes");
   cmd->add_flag("-q,--quiet", o->quiet, "no progress lines and no summary");
   cmd->add_option(
       "--log-json", o->log_json,
@@ -317,7 +362,57 @@ void add_run(CLI::App& app) {
                   "OCIO config file; default $OCIO, else the config shipped with hbil "
                   "(presets/ocio/hbil.ocio)");
   o->params.add_to(*cmd);
+}
+
+}  // namespace
+
+void add_run(CLI::App& app) {
+  auto o = std::make_shared<RunOptions>();
+  CLI::App* cmd =
+      app.add_subcommand("run", "compute the requested layers for every frame of a sequence");
+  add_run_options(cmd, o);
   cmd->callback([o] { run(*o); });
+}
+
+namespace {
+
+// Run's options parsed from `args` (after INPUT) into a fresh RunOptions; `app` keeps them.
+std::shared_ptr<RunOptions> parse_run_args(CLI::App& app, const std::string& input,
+                                           const std::vector<std::string>& args,
+                                           const std::string& context) {
+  auto o = std::make_shared<RunOptions>();
+  add_run_options(&app, o);
+  std::vector<std::string> reversed{args.rbegin(), args.rend()};
+  reversed.push_back(input);
+  try {
+    app.parse(reversed);
+  } catch (const CLI::ParseError& e) {
+    throw Error(Exit::usage, context + ": " + e.what());
+  }
+  return o;
+}
+
+}  // namespace
+
+void run_command(const std::string& input, const std::vector<std::string>& args,
+                 const std::string& context) {
+  CLI::App app{"run"};
+  run(*parse_run_args(app, input, args, context));
+}
+
+RunRequest read_run_request(const std::string& input, const std::vector<std::string>& args,
+                            const std::string& context) {
+  CLI::App app{"run"};
+  const std::shared_ptr<RunOptions> o = parse_run_args(app, input, args, context);
+  for (const char* option :
+       {"--frames", "--preroll", "--cut-frames", "--threads", "--skip-existing", "--log-json"})
+    if (app.count(option) > 0)
+      throw Error(Exit::usage, context + ": " + option + " is set by the plan, not given to run");
+  RunRequest r;
+  r.output = {o->output, o->no_display, o->display_out, o->display_layer,
+              io::DisplaySettings{o->ocio_config, o->input_space, o->display, o->view}};
+  r.params = o->params.load();
+  return r;
 }
 
 }  // namespace hbil::cli

@@ -35,7 +35,8 @@ CLI::Validator amount_check(const std::string& meaning) {
 void ShotOptions::add_to(CLI::App& cmd, const std::string& ref_help) {
   cmd.add_option("SHOT", shot, "input EXR frame pattern (or one file), as for run")->required();
   cmd.add_option("--ref", refs, ref_help)->required()->allow_extra_args(false);
-  cmd.add_option("--frames", frames, "frame range A-B or one frame N (default: all found)");
+  cmd.add_option("--frames", frames,
+                 "frames: N, A-B, A-BxSTEP, lists such as 1,3,5-8 (default: all found)");
   cmd.add_option("--mask", mask,
                  "valid pixels: auto (reference depth, else alpha), none, or a channel name")
       ->capture_default_str();

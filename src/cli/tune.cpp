@@ -52,13 +52,7 @@ void tune(const TuneOptions& o) {
   const pipeline::TuneResult r = pipeline::run_tune(s, [&](const std::string& line) {
     if (!o.shot.quiet) std::cerr << "hbil: " << line << "\n";
   });
-  io::Temporary tmp(o.output);
-  {
-    std::ofstream out(tmp.path());
-    out << r.preset.dump(2) << "\n";
-    if (!out.flush()) throw Error(Exit::output, o.output + ": cannot write");
-  }
-  io::commit(tmp.keep(), o.output);
+  io::write_file(o.output, r.preset.dump(2) + "\n");
   std::printf("%s: %s, %s %.2f dB at %.3f s per frame (%zu configurations measured)\n",
               o.output.c_str(), r.goal.c_str(), r.layer.c_str(), r.chosen.errors.at(r.layer).psnr(),
               r.chosen.seconds_per_frame, r.steps.size());

@@ -20,6 +20,7 @@ enum class Exit : int {
   camera = 6,        // no usable camera, or solved camera too inaccurate
   preset = 7,        // unknown key, out-of-range value, malformed JSON
   output = 8,        // output cannot be written
+  incomplete = 9,    // farm check: frames of the plan are not done
 };
 
 class Error : public std::runtime_error {

@@ -37,6 +37,18 @@ double turn_degrees(const Mat3d& a, const Mat3d& b) {
 
 }  // namespace
 
+std::string camera_cut(const Camera& prev, const Camera& cur, double depth, const Params& p) {
+  const double move = length(cur.centre() - prev.centre());
+  const double turn = turn_degrees(prev.R, cur.R);
+  std::ostringstream s;
+  s.precision(3);
+  if (depth > 0 && move > p.cut_camera_jump * depth)
+    s << "camera moved " << move << " (median depth " << depth << ")";
+  else if (turn > p.cut_camera_angle)
+    s << "camera turned " << turn << " degrees";
+  return s.str();
+}
+
 TemporalChain::TemporalChain(Params p) : p_(std::move(p)) {}
 
 AoFrame TemporalChain::process(const GBuffer& g, const Camera& cam, int frame, bool cut,
@@ -78,18 +90,8 @@ AoFrame TemporalChain::run(const GBuffer& g, GBuffer* release, const Camera& cam
     cut = true, rep.cut_reason = "resolution changed";
   if (cut && rep.cut_reason.empty()) rep.cut_reason = "given";
   if (has_history_ && !cut) {
-    const double move = length(cam.centre() - cam_.centre()), depth = median_depth(v);
-    const double turn = turn_degrees(cam_.R, cam.R);
-    std::ostringstream s;
-    s.precision(3);
-    if (depth > 0 && move > p_.cut_camera_jump * depth) {
-      s << "camera moved " << move << " (median depth " << depth << ")";
-      cut = true;
-    } else if (turn > p_.cut_camera_angle) {
-      s << "camera turned " << turn << " degrees";
-      cut = true;
-    }
-    rep.cut_reason = s.str();
+    rep.cut_reason = camera_cut(cam_, cam, median_depth(v), p_);
+    cut = !rep.cut_reason.empty();
   }
 
   // Reprojection of the history into this frame.

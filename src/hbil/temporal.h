@@ -43,6 +43,11 @@ struct TemporalReport {
   double filled = 0;         // fraction filled by push/pull (feedback only)
 };
 
+// The camera test of cut detection: "" when `cur` can follow `prev` (moved at most
+// cut_camera_jump x `depth`, the frame's median view depth, 0 when not known; turned at most
+// cut_camera_angle), else what it did ("camera moved 3.1 (median depth 2.4)").
+std::string camera_cut(const Camera& prev, const Camera& cur, double depth, const Params& p);
+
 class TemporalChain {
  public:
   // Outputs "auto" are resolved on the first frame (resolve_frame_outputs).

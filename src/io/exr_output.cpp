@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
@@ -101,7 +102,7 @@ std::string camera_json(const Camera& c) {
 
 std::string write_temporary(const std::string& final_path, const AoFrame& f,
                             const OIIO::ImageSpec& input_header, const Params& p, const Camera& cam,
-                            std::optional<int> frame) {
+                            std::optional<int> frame, const std::string& job) {
   Temporary tmp(final_path);
   const std::vector<OutputChannel> plan = output_plan(f, p);
   OIIO::ImageSpec spec(f.width, f.height, int(plan.size()), OIIO::TypeDesc::FLOAT);
@@ -132,6 +133,7 @@ std::string write_temporary(const std::string& final_path, const AoFrame& f,
   spec.attribute("hbil:version", HBIL_VERSION);
   spec.attribute("hbil:preset", to_json(p).dump());
   spec.attribute("hbil:camera", camera_json(cam));
+  if (!job.empty()) spec.attribute("hbil:job", job);
   set_camera_attributes(spec, cam);
 
   auto out = OIIO::ImageOutput::create(tmp.path());
@@ -199,6 +201,16 @@ void OutputBatch::discard() noexcept {
   // The folders the command created go too, unless they hold files it finished.
   if (!committed_)
     for (const auto& dir : created_) fs::remove_all(dir, ec);
+}
+
+void write_file(const std::string& path, const std::string& text) {
+  Temporary tmp(path);
+  {
+    std::ofstream out(tmp.path(), std::ios::binary);
+    out << text;
+    if (!out.flush()) throw Error(Exit::output, path + ": cannot write");
+  }
+  commit(tmp.keep(), path);
 }
 
 void commit(const std::string& temporary, const std::string& final_path) {

@@ -4,7 +4,8 @@
 // layers as half floats unless colour_half is false, data layers 32-bit float, channels named
 // <layer>.<chan> (ao.Y, bentcone.X/Y/Z/W). The input's header attributes are copied
 // through; hbil adds hbil:version, hbil:preset (the effective parameters as JSON),
-// hbil:camera (the camera used, JSON) and the standard worldToCamera / worldToNDC.
+// hbil:camera (the camera used, JSON), hbil:job (what the frame was made from, for
+// `run --skip-existing`) and the standard worldToCamera / worldToNDC.
 // Frames are written to a hidden temporary file in the output folder and renamed into
 // place only by commit(), so no reader ever sees a partial frame and a failed run leaves
 // what was there before.
@@ -60,12 +61,17 @@ std::string camera_json(const Camera& c);
 // and a non-finite one is an internal error, Error(Exit::failure), naming the frame (when
 // `frame` is given), the file, the channel, the pixel and the value; the temporary is
 // removed then.
+// `job`: the frame's job digest, stored as hbil:job when not empty (pipeline/frame_output.h).
 std::string write_temporary(const std::string& final_path, const AoFrame& f,
                             const OIIO::ImageSpec& input_header, const Params& p, const Camera& cam,
-                            std::optional<int> frame = std::nullopt);
+                            std::optional<int> frame = std::nullopt, const std::string& job = "");
 
 // Renames a temporary into place (replacing an older file). Throws Error(Exit::output).
 void commit(const std::string& temporary, const std::string& final_path);
+
+// Writes `text` to a temporary beside `path` and renames it into place: the file appears
+// whole or not at all. Throws Error(Exit::output).
+void write_file(const std::string& path, const std::string& text);
 
 // Files waiting as temporaries (add()) until commit() renames them into place: the files of
 // one frame (its EXR and display image), or of one command that is all or nothing. discard()

@@ -2,11 +2,14 @@
 // Syntax and matching rules: see sequence.h.
 #include "io/sequence.h"
 
+#include <OpenImageIO/filesystem.h>
+
 #include <algorithm>
 #include <cctype>
 #include <charconv>
 #include <cstdio>
 #include <filesystem>
+#include <regex>
 #include <system_error>
 
 #include "hbil/error.h"
@@ -26,11 +29,13 @@ bool all_digits(std::string_view s) {
          std::all_of(s.begin(), s.end(), [](unsigned char c) { return std::isdigit(c) != 0; });
 }
 
-// Non-negative int from a digit string; nullopt when it does not fit.
-std::optional<int> to_int(std::string_view digits) {
+// Int from a digit string, with a leading '-' when `negative_ok`; nullopt when it does not
+// fit.
+std::optional<int> to_int(std::string_view digits, bool negative_ok = false) {
   int v = 0;
   auto [end, ec] = std::from_chars(digits.data(), digits.data() + digits.size(), v);
-  if (ec != std::errc() || end != digits.data() + digits.size() || v < 0) return std::nullopt;
+  if (ec != std::errc() || end != digits.data() + digits.size() || (v < 0 && !negative_ok))
+    return std::nullopt;
   return v;
 }
 
@@ -43,10 +48,10 @@ FramePattern::FramePattern(std::string pattern) : text_(std::move(pattern)) {
   size_t field_end_in_text = 0;
   const std::string& s = text_;
   for (size_t i = 0; i < s.size();) {
-    if (s[i] == '#') {
+    if (s[i] == '#' || s[i] == '@') {
       size_t j = i;
-      while (j < s.size() && s[j] == '#') ++j;
-      if (have_field) pattern_error(s, "more than one frame field ('#' or '%d')");
+      while (j < s.size() && s[j] == s[i]) ++j;
+      if (have_field) pattern_error(s, "more than one frame field ('#', '@' or '%d')");
       have_field = true;
       prefix_ = literal;
       literal.clear();
@@ -73,7 +78,7 @@ FramePattern::FramePattern(std::string pattern) : text_(std::move(pattern)) {
       if (j >= s.size() || s[j] != 'd')
         pattern_error(s, "only %d and %0Nd are allowed (use %% for a literal '%'), found \"" +
                              s.substr(i, std::min<size_t>(4, s.size() - i)) + "\"");
-      if (have_field) pattern_error(s, "more than one frame field ('#' or '%d')");
+      if (have_field) pattern_error(s, "more than one frame field ('#', '@' or '%d')");
       have_field = true;
       prefix_ = literal;
       literal.clear();
@@ -129,8 +134,9 @@ std::vector<int> FramePattern::existing_frames() const {
     if (name.compare(name.size() - suffix_.size(), suffix_.size(), suffix_) != 0) continue;
     const std::string_view digits = std::string_view(name).substr(
         name_start.size(), name.size() - name_start.size() - suffix_.size());
-    if (!all_digits(digits)) continue;
-    const std::optional<int> frame = to_int(digits);
+    const bool minus = !digits.empty() && digits.front() == '-';
+    if (!all_digits(minus ? digits.substr(1) : digits)) continue;
+    const std::optional<int> frame = to_int(digits, true);
     // The file is frame n exactly when formatting n gives its name back (padding rules).
     if (frame && path(*frame) == dir_prefix + name) frames.push_back(*frame);
   }
@@ -139,19 +145,45 @@ std::vector<int> FramePattern::existing_frames() const {
   return frames;
 }
 
-FrameRange parse_frame_range(const std::string& text) {
-  const auto fail = [&](const std::string& why) -> FrameRange {
-    throw Error(Exit::usage, "--frames: \"" + text + "\": " + why +
-                                 " (expected N or A-B with 0 <= A <= B, e.g. 1-8)");
+std::vector<int> parse_frame_list(const std::string& text, const std::string& option) {
+  const auto fail = [&](const std::string& why) {
+    throw Error(Exit::usage, option + ": \"" + text + "\": " + why +
+                                 " (expected frames as oiiotool takes them: 12, 1-100, 1-100x2, "
+                                 "1,3,5-8, -5--1)");
   };
-  const size_t dash = text.find('-');
-  const std::string a = text.substr(0, dash);
-  const std::string b = dash == std::string::npos ? a : text.substr(dash + 1);
-  if (!all_digits(a) || !all_digits(b)) return fail("not a frame number or range");
-  const std::optional<int> first = to_int(a), last = to_int(b);
-  if (!first || !last) return fail("frame number too large");
-  if (*first > *last) return fail("first frame after last frame");
-  return {*first, *last};
+  if (text.empty()) fail("no frames");
+  // Each item is checked here, so that OpenImageIO (which reads what it can of a malformed
+  // item) is only given what it reads exactly, and no list holds more than kMaxFrames.
+  static const std::regex item_syntax(R"((-?\d+)(?:-(-?\d+)(?:([xy])(\d+))?)?)");
+  long long count = 0;
+  size_t begin = 0;
+  for (;;) {
+    const size_t comma = text.find(',', begin);
+    const std::string item = text.substr(begin, comma == std::string::npos ? comma : comma - begin);
+    std::smatch m;
+    // (std::regex recurses per character: a long item is refused before it is matched.)
+    if (item.size() > 40 || !std::regex_match(item, m, item_syntax))
+      fail(item.empty() ? "an empty item" : "\"" + item + "\" is not a frame or a range");
+    const std::optional<int> a = to_int(m.str(1), true);
+    const std::optional<int> b = m[2].matched ? to_int(m.str(2), true) : a;
+    const std::optional<int> step = m[4].matched ? to_int(m.str(4)) : 1;
+    const auto in_range = [](std::optional<int> f) {
+      return f && std::abs((long long)(*f)) <= kMaxFrame;
+    };
+    if (!in_range(a) || !in_range(b))
+      fail("a frame number in \"" + item + "\" is beyond +-" + std::to_string(kMaxFrame));
+    if (!step || *step < 1) fail("the step in \"" + item + "\" must be a positive number");
+    count += std::abs((long long)(*b) - *a) + 1;
+    if (count > kMaxFrames) fail("more than " + std::to_string(kMaxFrames) + " frames");
+    if (comma == std::string::npos) break;
+    begin = comma + 1;
+  }
+  std::vector<int> frames;
+  if (!OIIO::Filesystem::enumerate_sequence(text, frames)) fail("not a frame list");
+  std::sort(frames.begin(), frames.end());
+  frames.erase(std::unique(frames.begin(), frames.end()), frames.end());
+  if (frames.empty()) fail("no frames");  // "1-2y1": the complement of every frame
+  return frames;
 }
 
 std::optional<int> frame_number_from_name(const std::string& path) {

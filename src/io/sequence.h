@@ -1,7 +1,9 @@
 // sequence.h: frame-numbered file names (input G-buffer sequences and outputs).
 //
 // Pattern syntax (the frame field must be in the file name, not in a directory):
-//   "dir/frame_####.exr"  N '#' = frame number zero-padded to N digits (Blender, oiiotool);
+//   "dir/frame_####.exr"  N '#' = frame number zero-padded to N digits (Blender's rule; a
+//                         lone '#' is one digit, where oiiotool reads four);
+//   "dir/frame_@@@@.exr"  N '@' = N digits (oiiotool's rule, the same as Blender's '#');
 //   "dir/frame_%04d.exr"  printf style, also "%d" (no padding); "%%" is a literal '%';
 //   "dir/shot.exr"        no field: a single file.
 // A path is formatted like printf("%0*d", N, frame) ("%d": N = 0), so a frame that needs
@@ -10,7 +12,10 @@
 // A file on disk belongs to the sequence exactly when path(frame) reproduces its name, so
 // "frame_007.exr" is not frame 7 of "frame_%d.exr" and "frame_12.exr" is not a frame of
 // "frame_####.exr".
-// Errors: malformed patterns and ranges throw hbil::Error(Exit::usage, ...).
+// Frame lists (--frames, --cut-frames) take oiiotool's syntax, through OpenImageIO's
+// Filesystem::enumerate_sequence: "12", "1-100", "1-100x2" (every second), "1-100y2" (the
+// others), "1,3,5-8", negative frames ("-5--1", "-3-3"), ranges in either direction.
+// Errors: malformed patterns and lists throw hbil::Error(Exit::usage, ...).
 #pragma once
 
 #include <optional>
@@ -32,8 +37,9 @@ class FramePattern {
   // The file of a frame; a single file returns itself whatever the frame.
   std::string path(int frame) const;
   // Frames of the sequence present in the directory (regular files or links to them),
-  // ascending. Non-negative frames only. A single file: { frame_number_from_name(file)
-  // or 0 } when it exists. Empty when the directory does not exist.
+  // ascending, negative ones included ("frame_-001.exr" is frame -1 of "frame_####.exr"). A single
+  // file: { frame_number_from_name(file) or 0 } when it exists. Empty when the directory does not
+  // exist.
   std::vector<int> existing_frames() const;
 
  private:
@@ -43,15 +49,13 @@ class FramePattern {
   int pad_ = 0;
 };
 
-// Inclusive frame range for --frames.
-struct FrameRange {
-  int first = 0;
-  int last = 0;
-};
-
-// "12" -> {12, 12}; "1-8" -> {1, 8}. Non-negative integers, first <= last, no spaces.
-// Throws Error(Exit::usage, "--frames: ...").
-FrameRange parse_frame_range(const std::string& text);
+// A frame list in oiiotool's syntax (above) -> its frames, ascending, each once: "1-8x2,3"
+// -> {1, 3, 5, 7}. Items are comma-separated, without spaces; a step is a positive number; a
+// list holds at most kMaxFrames frames, each within +-kMaxFrame. Throws Error(Exit::usage,
+// "<option>: \"<text>\": ...").
+constexpr int kMaxFrames = 1000000;
+constexpr int kMaxFrame = 999999999;
+std::vector<int> parse_frame_list(const std::string& text, const std::string& option = "--frames");
 
 // Frame number of a single file from the last digit group of its file name without the
 // extension: "dir/shot_0042.exr" -> 42, "a.0007.exr" -> 7; nullopt when the name has no

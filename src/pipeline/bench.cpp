@@ -458,14 +458,7 @@ void write_bench(const BenchResult& r, const std::string& dir) {
   fs::create_directories(dir, ec);
   if (ec) throw Error(Exit::output, dir + ": cannot create folder: " + ec.message());
   auto write_file = [&](const std::string& name, const std::string& text) {
-    const std::string path = (fs::path(dir) / name).string();
-    io::Temporary tmp(path);
-    {
-      std::ofstream out(tmp.path(), std::ios::binary);
-      out << text;
-      if (!out.flush()) throw Error(Exit::output, path + ": cannot write");
-    }
-    io::commit(tmp.keep(), path);
+    io::write_file((fs::path(dir) / name).string(), text);
   };
   // JSON: everything.
   nlohmann::json j;

@@ -51,7 +51,7 @@ std::vector<BenchConfig> expand_sweeps(const std::vector<BenchConfig>& bases,
 
 struct BenchSettings {
   std::string shot;    // input frame pattern or one file
-  std::string frames;  // "A-B", "N" or "" (every frame)
+  std::string frames;  // a frame list (io::parse_frame_list) or "" (every frame)
   std::vector<BenchConfig> configs;
   std::vector<BenchReference> refs;
   std::vector<BenchRender> renders;

@@ -1,7 +1,11 @@
 // frame_output.cpp: see frame_output.h.
 #include "pipeline/frame_output.h"
 
+#include <OpenImageIO/imageio.h>
+
 #include <algorithm>
+#include <cinttypes>
+#include <cstdio>
 #include <exception>
 #include <filesystem>
 #include <future>
@@ -43,6 +47,68 @@ const std::vector<float>& display_pixels(const AoFrame& f, const std::string& la
   for (size_t i = 0; i < n; ++i)
     scratch[3 * i] = v[i].x, scratch[3 * i + 1] = v[i].y, scratch[3 * i + 2] = v[i].z;
   return scratch;
+}
+
+// 64-bit FNV-1a over fields, each preceded by its length so that no two lists of fields
+// hash the same bytes.
+class Digest {
+ public:
+  Digest& add(const std::string& field) {
+    const uint64_t n = field.size();
+    mix(&n, sizeof n);
+    mix(field.data(), field.size());
+    return *this;
+  }
+  std::string hex() const {
+    char text[17];
+    std::snprintf(text, sizeof text, "%016" PRIx64, h_);
+    return text;
+  }
+
+ private:
+  void mix(const void* data, size_t size) {
+    for (size_t i = 0; i < size; ++i) {
+      h_ ^= static_cast<const unsigned char*>(data)[i];
+      h_ *= 0x100000001b3ull;
+    }
+  }
+  uint64_t h_ = 0xcbf29ce484222325ull;
+};
+
+// A file as the job digest sees it: its name (not its folder, which a farm host may mount
+// elsewhere), size and modification time; "missing" when it cannot be looked at.
+std::string file_identity(const std::string& path) {
+  std::error_code ec, ec2;
+  const auto size = fs::file_size(path, ec);
+  const auto time = fs::last_write_time(path, ec2);
+  if (ec || ec2) return fs::path(path).filename().string() + " missing";
+  return fs::path(path).filename().string() + " " + std::to_string(size) + " " +
+         std::to_string(time.time_since_epoch().count());
+}
+
+// Whether an image file opens and its first and last rows read (a file cut short loses its
+// last rows first); `why` says what failed.
+bool reads_whole(const std::string& path, std::string& why) {
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) {
+    why = path + " is missing";
+    return false;
+  }
+  auto in = OIIO::ImageInput::open(path);
+  if (!in) {
+    OIIO::geterror();  // not kept for a later message
+    why = path + " does not open";
+    return false;
+  }
+  const OIIO::ImageSpec& spec = in->spec();
+  std::vector<float> row(size_t(std::max(spec.width, 1)) * size_t(std::max(spec.nchannels, 1)));
+  for (int y : {spec.y, spec.y + spec.height - 1})
+    if (!in->read_scanline(y, 0, OIIO::TypeDesc::FLOAT, row.data())) {
+      in->geterror();
+      why = path + ": row " + std::to_string(y) + " does not read";
+      return false;
+    }
+  return true;
 }
 
 }  // namespace
@@ -108,6 +174,38 @@ FrameOutput::FrameOutput(const OutputSettings& s, const SequenceJob& job)
         folders_.push_back(dir);
     }
   }
+  // Job digests: what every frame has in common, then its inputs.
+  Digest common;
+  common.add(HBIL_VERSION).add(to_json(p_).dump());
+  if (display_) common.add(display_layer_).add(display_->describe());  // not its folder
+  for (int cut : plan.cuts) common.add(std::to_string(cut));
+  if (!p_.environment.empty()) common.add(file_identity(p_.environment));
+  const bool chained = p_.temporal && plan.preroll.size() + plan.frames.size() > 1;
+  Digest chain = common;
+  for (int f : plan.preroll) chain.add(file_identity(plan.input.path(f)));
+  for (int f : plan.frames) {
+    const std::string input = file_identity(plan.input.path(f));
+    chain.add(input);
+    jobs_[f] = chained ? chain.hex() : Digest(common).add(input).hex();
+  }
+}
+
+bool FrameOutput::done(int frame, std::string* why) const {
+  std::string reason;
+  bool ok = reads_whole(out_.path(frame), reason);
+  if (ok) {
+    auto in = OIIO::ImageInput::open(out_.path(frame));
+    const std::string made = in ? in->spec().get_string_attribute("hbil:job") : "";
+    if (made != job(frame)) {
+      ok = false;
+      reason =
+          out_.path(frame) + (made.empty() ? " was not made by hbil --skip-existing's rules"
+                                           : " was made by other settings or from other inputs");
+    }
+  }
+  if (ok && display_pattern_) ok = reads_whole(display_pattern_->path(frame), reason);
+  if (!ok && why) *why = reason;
+  return ok;
 }
 
 int FrameOutput::remove_stale() const {
@@ -139,7 +237,8 @@ void FrameOutput::write(const FrameResult& r, const std::function<void()>& commi
     });
   std::exception_ptr failed;
   try {
-    batch_.add(io::write_temporary(out_path, r.outputs, r.input->spec, p_, r.camera, r.frame),
+    batch_.add(io::write_temporary(out_path, r.outputs, r.input->spec, p_, r.camera, r.frame,
+                                   job(r.frame)),
                out_path);
   } catch (...) {
     failed = std::current_exception();

@@ -6,6 +6,7 @@
 #pragma once
 
 #include <functional>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -48,6 +49,17 @@ class FrameOutput {
   // interrupt that arrived meanwhile takes effect (io::FrameCommit), so that what it records
   // (a log line) is never missing for a frame in place.
   void write(const FrameResult& r, const std::function<void()>& committed = {});
+  // The job digest of a planned frame, stored in its EXR as hbil:job: a hash of hbil's
+  // version, the effective parameters, the display image's settings, the cuts, the
+  // environment file and the inputs (file name, size, modification time) the frame is made
+  // from: its own, and with a temporal chain every one from the run's first frame (pre-roll
+  // included) to it, since they all shape its history.
+  const std::string& job(int frame) const { return jobs_.at(frame); }
+  // Whether a frame's files are in place, complete and made by this job (run
+  // --skip-existing): its EXR holds this job digest and its first and last rows read, and
+  // its display image, when the run makes one, is there and reads. When not, `why` says
+  // what is missing or different.
+  bool done(int frame, std::string* why = nullptr) const;
   // After a failure: removes the output folders the run created if no frame was written.
   void discard() noexcept { batch_.discard(); }
   // The frames written so far, in order.
@@ -67,6 +79,7 @@ class FrameOutput {
   io::OutputBatch batch_;
   std::vector<std::string> folders_;  // where the files go
   std::vector<int> written_;
+  std::map<int, std::string> jobs_;  // frame -> job digest
 };
 
 }  // namespace hbil::pipeline

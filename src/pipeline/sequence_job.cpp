@@ -3,6 +3,7 @@
 
 #include <malloc.h>
 
+#include <algorithm>
 #include <chrono>
 #include <future>
 #include <optional>
@@ -35,21 +36,8 @@ void require_same_size(const io::InputFrame& in, int width, int height,
 }  // namespace
 
 std::set<int> parse_cut_frames(const std::string& text) {
-  std::set<int> cuts;
-  std::stringstream s(text);
-  std::string item;
-  while (std::getline(s, item, ',')) {
-    try {
-      size_t used = 0;
-      const int f = std::stoi(item, &used);
-      if (used != item.size() || f < 0) throw std::invalid_argument(item);
-      cuts.insert(f);
-    } catch (const std::exception&) {
-      throw Error(Exit::usage,
-                  "--cut-frames: \"" + item + "\" is not a frame number (expected e.g. 12,40)");
-    }
-  }
-  return cuts;
+  const std::vector<int> frames = io::parse_frame_list(text, "--cut-frames");
+  return {frames.begin(), frames.end()};
 }
 
 SequencePlan plan_sequence(const std::string& input, const std::string& frames, int preroll,
@@ -61,8 +49,7 @@ SequencePlan plan_sequence(const std::string& input, const std::string& frames, 
                   "--frames needs an input frame pattern, got the single file " + input);
     plan.frames = {io::frame_number_from_name(input).value_or(0)};
   } else if (!frames.empty()) {
-    const io::FrameRange r = io::parse_frame_range(frames);
-    for (int f = r.first; f <= r.last; ++f) plan.frames.push_back(f);
+    plan.frames = io::parse_frame_list(frames);
   } else {
     plan.frames = plan.input.existing_frames();
     if (plan.frames.empty())
@@ -150,7 +137,8 @@ bool SequenceJob::overlaps(Overlap o) const {
           size_t(first_.spec.width) * size_t(first_.spec.height) <= (size_t(1) << 22));
 }
 
-void SequenceJob::run(const Hooks& hooks, Overlap overlap_mode, const SH9* given) const {
+void SequenceJob::run(const Hooks& hooks, Overlap overlap_mode, const SH9* given,
+                      const std::set<int>& done) const {
   const SH9* environment = given ? given : environment_ ? &*environment_ : nullptr;
   // A frame as read: header, fields and camera, with the time each took.
   struct Loaded {
@@ -176,7 +164,23 @@ void SequenceJob::run(const Hooks& hooks, Overlap overlap_mode, const SH9* given
   // Pre-roll frames first (computed, not delivered), then the frames to deliver.
   std::vector<int> order = plan_.preroll;
   order.insert(order.end(), plan_.frames.begin(), plan_.frames.end());
+  // Whether the run has a temporal chain is decided on the whole plan, done frames included,
+  // so that a resumed run computes what an uninterrupted one does.
   const bool temporal = p_.temporal && order.size() > 1;
+  if (!done.empty()) {
+    if (temporal) {
+      while (!order.empty() && order.size() > plan_.preroll.size() && done.count(order.back()))
+        order.pop_back();
+      if (order.size() == plan_.preroll.size()) order.clear();  // every frame is done
+    } else {
+      std::vector<int> kept;
+      for (size_t k = 0; k < order.size(); ++k)
+        if (k < plan_.preroll.size() || !done.count(order[k])) kept.push_back(order[k]);
+      order = kept;
+      if (order.size() == plan_.preroll.size()) order.clear();
+    }
+  }
+  if (order.empty()) return;
   // The sequence's step: frames rendered on twos are no gap.
   int step = 0;
   for (size_t k = 1; k < order.size(); ++k)
@@ -209,7 +213,8 @@ void SequenceJob::run(const Hooks& hooks, Overlap overlap_mode, const SH9* given
     for (size_t k = 0; k < order.size(); ++k) {
       const auto t0 = Clock::now();
       const int frame = order[k];
-      const bool preroll = k < plan_.preroll.size();
+      const bool history_only = k >= plan_.preroll.size() && done.count(frame) > 0;
+      const bool preroll = k < plan_.preroll.size() || history_only;
       Loaded cur = next.get();
       auto read_next = [&] {
         if (k + 1 < order.size()) next = std::async(std::launch::async, load, order[k + 1]);
@@ -249,6 +254,11 @@ void SequenceJob::run(const Hooks& hooks, Overlap overlap_mode, const SH9* given
       const double compute_ms = ms(t_compute, Clock::now());
       if (!overlap && preroll) read_next();
       if (rep.cut && hooks.cut) hooks.cut(frame, rep);
+      if (history_only) {
+        if (hooks.history_only)
+          hooks.history_only(frame, std::chrono::duration<double>(Clock::now() - t0).count());
+        continue;
+      }
       if (preroll) {
         if (hooks.preroll_done)
           hooks.preroll_done(frame, k + 1, plan_.preroll.size(),
@@ -258,7 +268,9 @@ void SequenceJob::run(const Hooks& hooks, Overlap overlap_mode, const SH9* given
       Delivery d{std::make_unique<io::InputFrame>(std::move(cur.in)), {}};
       FrameResult& r = d.result;
       r.frame = frame;
-      r.index = k + 1 - plan_.preroll.size();
+      r.index = size_t(std::lower_bound(plan_.frames.begin(), plan_.frames.end(), frame) -
+                       plan_.frames.begin()) +
+                1;
       r.input = d.input.get();
       r.camera = cur.cam;
       r.outputs = std::move(result);

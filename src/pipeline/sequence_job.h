@@ -32,13 +32,14 @@ struct SequencePlan {
   std::set<int> cuts;        // frames that start a new shot (history dropped)
 };
 
-// "12,40" -> {12, 40}. Throws Error(Exit::usage, "--cut-frames: ...").
+// "12,40" -> {12, 40}; any frame list (io::parse_frame_list). Throws
+// Error(Exit::usage, "--cut-frames: ...").
 std::set<int> parse_cut_frames(const std::string& text);
 
-// The frames of `input` (a pattern or one file): `frames` "A-B" or "N", or every frame found
-// when empty; `preroll` P: the frames that exist in [first − P, first − 1]; `cut_frames` as
-// parse_cut_frames. Throws Error(Exit::usage) for options that do not fit the input and
-// Error(Exit::input) for a pattern that matches nothing.
+// The frames of `input` (a pattern or one file): `frames` a frame list (io::parse_frame_list:
+// "1-8", "1-100x2", "1,3,5-8"), or every frame found when empty; `preroll` P: the frames that exist
+// in [first − P, first − 1]; `cut_frames` as parse_cut_frames. Throws Error(Exit::usage) for
+// options that do not fit the input and Error(Exit::input) for a pattern that matches nothing.
 SequencePlan plan_sequence(const std::string& input, const std::string& frames, int preroll,
                            const std::string& cut_frames);
 
@@ -102,13 +103,21 @@ class SequenceJob {
     // a zero-length normal, taken as background), on the calling thread, before the frame
     // is computed. The message names the frame, the file and the first pixel concerned.
     std::function<void(int frame, const std::string& message)> warning;
+    // A frame that is done (run's `done`) computed again for the history of the frames
+    // after it: its number and seconds.
+    std::function<void(int frame, double seconds)> history_only;
   };
   // With a temporal chain, a gap in the frame numbers drops the history: a frame whose
   // predecessor at the sequence's step (the smallest difference between its frame numbers)
   // is missing is computed as after a cut, with the reason "frame N missing".
   // `environment`: the far field's SH, instead of the one the parameters name.
+  // `done`: planned frames whose outputs are already in place (run --skip-existing), not
+  // delivered again. Without a temporal chain they are not read at all. With one, those
+  // before the last frame not done are computed as pre-roll is (not delivered), so that the
+  // frames after them get the history an uninterrupted run gives them; those after it are
+  // not computed.
   void run(const Hooks& hooks, Overlap overlap = Overlap::automatic,
-           const SH9* environment = nullptr) const;
+           const SH9* environment = nullptr, const std::set<int>& done = {}) const;
 
  private:
   SequencePlan plan_;

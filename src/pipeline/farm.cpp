@@ -1,0 +1,324 @@
+// farm.cpp: see farm.h.
+#include "pipeline/farm.h"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <sstream>
+
+#include "hbil/error.h"
+#include "hbil/scene_scale.h"
+#include "hbil/temporal.h"
+#include "io/exr_frame.h"
+#include "io/sequence.h"
+#include "pipeline/sequence_job.h"
+
+namespace hbil::pipeline {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// A word for the shell: single-quoted unless it is plain.
+std::string shell_word(const std::string& w) {
+  const bool plain = !w.empty() && std::all_of(w.begin(), w.end(), [](unsigned char c) {
+    return std::isalnum(c) || std::string_view("-_./=:,+@%").find(char(c)) != std::string::npos;
+  });
+  if (plain) return w;
+  std::string q = "'";
+  for (char c : w) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return q + "'";
+}
+
+}  // namespace
+
+int seam_preroll(const Params& p, std::string* why) {
+  if (!p.temporal) {
+    if (why) *why = "no temporal chain (temporal false): chunks need no pre-roll";
+    return 0;
+  }
+  // A chunk that starts cold differs from a whole run's frame there by kColdDifference of the
+  // composite (relative RMSE), and the difference fades by a factor r a frame: the history
+  // keeps history_weight of itself, and the light fed back through it (feedback) a fifth of
+  // what the accumulation lets go. Fitted on two 64-frame moves (samples/blender study_shots.py
+  // and room_shots.py --shot long, README "On the farm"): 0.9 gives r = 0.92, where 0.89 and
+  // 0.83 were measured, 0.8 gives 0.84 (measured 0.84 and 0.77), 0.7 gives 0.76 (0.79, 0.72).
+  constexpr double kColdDifference = 0.02;
+  const double w = std::clamp(p.history_weight, 0.0, 0.99);
+  const double r = w + (1 - w) * (p.feedback ? 0.2 : 0.0);
+  const int preroll =
+      r > 0 ? std::max(0, int(std::ceil(std::log(kSeamTolerance / kColdDifference) / std::log(r))))
+            : 0;
+  if (why) {
+    std::ostringstream s;
+    s.precision(3);
+    s << "a cold start's difference of " << kColdDifference << " fades by " << r
+      << " a frame (history_weight " << p.history_weight << (p.feedback ? ", feedback" : "")
+      << ") to " << kSeamTolerance << " in " << preroll << " frames";
+    *why = s.str();
+  }
+  return preroll;
+}
+
+int run_memory_mb(int width, int height) {
+  // Peak RSS measured with the default outputs and a PNG: 161 MB at 256x144, 1081 MB at
+  // 1920x1080 (overlap on: three frames in flight), 1403 MB at 3840x2160 (overlap off).
+  const double mpx = double(width) * double(height) / 1e6;
+  const bool overlap = double(width) * double(height) <= double(1 << 22);
+  return int(std::ceil(144 + (overlap ? 452 : 152) * mpx));
+}
+
+std::string compact_frame_list(const std::vector<int>& f) {
+  std::string out;
+  for (size_t a = 0; a < f.size();) {
+    size_t b = a;
+    if (a + 1 < f.size()) {
+      const long long step = (long long)(f[a + 1]) - f[a];
+      while (b + 1 < f.size() && (long long)(f[b + 1]) - f[b] == step) ++b;
+      // A run of two with a step is two frames, not a range.
+      if (step != 1 && b == a + 1) b = a;
+    }
+    out += (out.empty() ? "" : ",") + std::to_string(f[a]);
+    if (b > a) {
+      out += "-" + std::to_string(f[b]);
+      if (f[a + 1] - f[a] != 1) out += "x" + std::to_string(f[a + 1] - f[a]);
+    }
+    a = b + 1;
+  }
+  return out;
+}
+
+FarmPlan make_farm_plan(const FarmRequest& r, const Params& requested) {
+  if (r.chunk_size < 1)
+    throw Error(Exit::usage, "--chunk " + std::to_string(r.chunk_size) + ": must be 1 or more");
+  FarmPlan plan;
+  plan.hbil = HBIL_VERSION;
+  plan.directory = fs::current_path().string();
+  plan.shot = r.shot;
+  plan.run = r.run;
+  plan.cut_frames = r.cut_frames;
+  plan.chunk_size = r.chunk_size;
+  const SequencePlan seq = plan_sequence(r.shot, r.frames, 0, r.cut_frames);
+  if (!seq.input.is_sequence())
+    throw Error(Exit::usage, r.shot + ": a farm plan needs a frame pattern, not one file");
+  // Every header, the passes and the sizes, as a run checks them before its first frame.
+  const SequenceJob job(seq, requested);
+  const Params& p = job.params();
+  plan.width = job.first().spec.width;
+  plan.height = job.first().spec.height;
+  plan.memory_mb = run_memory_mb(plan.width, plan.height);
+  if (r.preroll == "auto") {
+    plan.preroll = seam_preroll(p, &plan.preroll_why);
+  } else {
+    try {
+      size_t used = 0;
+      plan.preroll = std::stoi(r.preroll, &used);
+      if (used != r.preroll.size() || plan.preroll < 0) throw std::invalid_argument(r.preroll);
+    } catch (const std::exception&) {
+      throw Error(Exit::usage, "--preroll " + r.preroll + ": expected auto or a count of frames");
+    }
+    plan.preroll_why = "given";
+  }
+  // Cuts: given, then found from the cameras (the chain's camera test; a cut it finds only
+  // from rejected history is not known before the frames are computed).
+  std::vector<std::pair<int, std::string>> cuts;
+  for (int c : seq.cuts) cuts.emplace_back(c, "given");
+  if (p.temporal) {
+    // The sequence's step, as SequenceJob::run finds it: a frame whose predecessor at that
+    // step is missing starts without history too.
+    int step = 0;
+    for (size_t k = 1; k < seq.frames.size(); ++k)
+      if (step == 0 || seq.frames[k] - seq.frames[k - 1] < step)
+        step = seq.frames[k] - seq.frames[k - 1];
+    Camera prev;
+    for (size_t k = 0; k < seq.frames.size(); ++k) {
+      const int f = seq.frames[k];
+      const io::InputFrame in = io::open_frame(seq.input.path(f), f, p);
+      GBuffer g = io::read_fields(in, {in.has("depth") ? "depth" : "position"}, p);
+      const Camera cam = io::find_camera(in, g, p);
+      if (k > 0 && !seq.cuts.count(f)) {
+        std::string why = seq.frames[k] - seq.frames[k - 1] > step
+                              ? "frame " + std::to_string(seq.frames[k - 1] + step) + " missing"
+                              : camera_cut(prev, cam, measure_scene(g, cam, p).depth_median, p);
+        if (!why.empty()) cuts.emplace_back(f, why);
+      }
+      prev = cam;
+    }
+  }
+  std::sort(cuts.begin(), cuts.end());
+  for (const auto& c : cuts) plan.cuts.push_back(c.first);
+  // Chunks: a new one at the shot's start, at each cut, and every chunk_size frames between.
+  size_t since_start = 0;
+  for (size_t k = 0; k < seq.frames.size(); ++k) {
+    const int f = seq.frames[k];
+    const auto cut = std::find_if(cuts.begin(), cuts.end(), [&](auto& c) { return c.first == f; });
+    const bool at_cut = cut != cuts.end() && k > 0;
+    if (k == 0 || at_cut || since_start == size_t(r.chunk_size)) {
+      FarmChunk c;
+      c.starts = k == 0 ? "shot" : at_cut ? "cut: " + cut->second : "chunk";
+      if (!at_cut && k > 0) {
+        // Pre-roll back to, never across, the last cut before the chunk.
+        int floor = seq.frames.front();
+        for (const auto& cc : cuts)
+          if (cc.first <= f) floor = std::max(floor, cc.first);
+        c.preroll = std::min(plan.preroll, f - floor);
+      }
+      plan.chunks.push_back(c);
+      since_start = 0;
+    }
+    plan.chunks.back().frames.push_back(f);
+    ++since_start;
+  }
+  return plan;
+}
+
+nlohmann::ordered_json to_json(const FarmPlan& plan) {
+  nlohmann::ordered_json j;
+  j["hbil"] = plan.hbil;
+  j["directory"] = plan.directory;
+  j["shot"] = plan.shot;
+  j["run"] = plan.run;
+  j["cut_frames"] = plan.cut_frames;
+  j["cuts"] = plan.cuts;
+  j["chunk_size"] = plan.chunk_size;
+  j["preroll"] = plan.preroll;
+  j["preroll_why"] = plan.preroll_why;
+  j["resolution"] = {plan.width, plan.height};
+  j["memory_mb"] = plan.memory_mb;
+  auto& chunks = j["chunks"] = nlohmann::ordered_json::array();
+  for (const FarmChunk& c : plan.chunks)
+    chunks.push_back({{"frames", compact_frame_list(c.frames)},
+                      {"first", c.frames.front()},
+                      {"last", c.frames.back()},
+                      {"count", c.frames.size()},
+                      {"preroll", c.preroll},
+                      {"starts", c.starts}});
+  return j;
+}
+
+FarmPlan farm_plan_from_json(const nlohmann::json& j, const std::string& where) {
+  FarmPlan plan;
+  try {
+    plan.hbil = j.at("hbil").get<std::string>();
+    plan.directory = j.at("directory").get<std::string>();
+    plan.shot = j.at("shot").get<std::string>();
+    plan.run = j.at("run").get<std::vector<std::string>>();
+    plan.cut_frames = j.at("cut_frames").get<std::string>();
+    plan.cuts = j.at("cuts").get<std::vector<int>>();
+    plan.chunk_size = j.at("chunk_size").get<int>();
+    plan.preroll = j.at("preroll").get<int>();
+    plan.preroll_why = j.value("preroll_why", "");
+    plan.width = j.at("resolution").at(0).get<int>();
+    plan.height = j.at("resolution").at(1).get<int>();
+    plan.memory_mb = j.at("memory_mb").get<int>();
+    for (const auto& c : j.at("chunks")) {
+      FarmChunk chunk;
+      chunk.frames = io::parse_frame_list(c.at("frames").get<std::string>(), "chunk frames");
+      chunk.preroll = c.at("preroll").get<int>();
+      chunk.starts = c.value("starts", "");
+      if (chunk.preroll < 0) throw std::invalid_argument("negative pre-roll");
+      plan.chunks.push_back(std::move(chunk));
+    }
+  } catch (const Error& e) {
+    throw Error(Exit::input, where + ": not a farm plan (" + e.what() + ")");
+  } catch (const std::exception& e) {
+    throw Error(Exit::input, where + ": not a farm plan (" + e.what() + ")");
+  }
+  if (plan.chunks.empty()) throw Error(Exit::input, where + ": not a farm plan (no chunks)");
+  return plan;
+}
+
+std::vector<std::string> chunk_run_args(const FarmPlan& plan, size_t index, int threads,
+                                        const std::string& log_json) {
+  const FarmChunk& c = plan.chunks.at(index);
+  std::vector<std::string> a = plan.run;
+  a.insert(a.end(), {"--frames", compact_frame_list(c.frames), "--preroll",
+                     std::to_string(c.preroll), "--skip-existing"});
+  if (!plan.cut_frames.empty()) a.insert(a.end(), {"--cut-frames", plan.cut_frames});
+  if (threads > 0) a.insert(a.end(), {"--threads", std::to_string(threads)});
+  if (!log_json.empty()) a.insert(a.end(), {"--log-json", log_json});
+  return a;
+}
+
+ChunkState check_chunk(const FarmPlan& plan, size_t index, const Params& params,
+                       const OutputSettings& output) {
+  ChunkState st;
+  st.index = index;
+  const FarmChunk& c = plan.chunks.at(index);
+  try {
+    const SequencePlan seq =
+        plan_sequence(plan.shot, compact_frame_list(c.frames), c.preroll, plan.cut_frames);
+    const SequenceJob job(seq, params);
+    const FrameOutput out(output, job);
+    for (int f : c.frames) {
+      std::string why;
+      if (!out.done(f, &why)) {
+        if (st.missing.empty()) st.why = why;
+        st.missing.push_back(f);
+      }
+    }
+  } catch (const Error& e) {
+    // An input that went missing or bad since the plan: no frame of the chunk can be told
+    // done, since none can be remade.
+    st.missing = c.frames;
+    st.why = e.what();
+  }
+  return st;
+}
+
+std::string slurm_array_script(const FarmPlan& plan, const SlurmSettings& s) {
+  const std::string name = s.job_name.empty()
+                               ? "hbil-" + fs::path(plan.shot).parent_path().filename().string()
+                               : s.job_name;
+  // The plan's estimate with a quarter more, at least 512 MB: Slurm ends a task that passes
+  // its --mem.
+  const int memory =
+      s.memory_mb > 0 ? s.memory_mb : std::max(512, int(std::ceil(plan.memory_mb * 1.25)));
+  std::ostringstream o;
+  o << "#!/bin/bash\n"
+    << "# hbil farm slurm: " << plan.chunks.size() << " chunks of " << plan.shot
+    << ", one array task each (plan " << s.plan_path << ").\n"
+    << "#   sbatch THIS_FILE                 runs every chunk\n"
+    << "#   sbatch --array=3,7 THIS_FILE     runs chunks 3 and 7 again (hbil farm check names "
+       "them)\n"
+    << "# A task run again resumes: its frames already in place are not made again.\n"
+    << "#SBATCH --job-name=" << name << "\n"
+    << "#SBATCH --array=0-" << plan.chunks.size() - 1 << "\n"
+    << "#SBATCH --ntasks=1\n"
+    << "#SBATCH --cpus-per-task=" << s.cpus << "\n"
+    << "#SBATCH --mem=" << memory << "M\n"
+    << "#SBATCH --chdir=" << plan.directory << "\n"
+    << "#SBATCH --output=" << s.log_dir << "/" << name << "-%A_%a.out\n";
+  for (const std::string& extra : s.sbatch) o << "#SBATCH " << extra << "\n";
+  o << "set -euo pipefail\n"
+    << "task=${SLURM_ARRAY_TASK_ID:?submit this script with sbatch}\n"
+    << "exec " << shell_word(s.hbil) << " farm run " << shell_word(s.plan_path)
+    << " --chunk \"$task\" --threads \"${SLURM_CPUS_PER_TASK:-" << s.cpus << "}\" --log-json "
+    << shell_word(s.log_dir) << "/chunk-\"$task\".jsonl\n";
+  return o.str();
+}
+
+std::string slurm_check_script(const FarmPlan& plan, const SlurmSettings& s,
+                               const std::string& array_script) {
+  const std::string name =
+      (s.job_name.empty() ? "hbil-" + fs::path(plan.shot).parent_path().filename().string()
+                          : s.job_name) +
+      "-check";
+  std::ostringstream o;
+  o << "#!/bin/bash\n"
+    << "# hbil farm slurm: after the job array, checks that every frame of the plan is in\n"
+    << "# place and complete; when not, its log names the chunks to submit again.\n"
+    << "#   sbatch --dependency=afterany:ARRAY_JOB_ID THIS_FILE\n"
+    << "#SBATCH --job-name=" << name << "\n"
+    << "#SBATCH --ntasks=1\n"
+    << "#SBATCH --cpus-per-task=1\n"
+    << "#SBATCH --mem=" << std::max(256, plan.memory_mb / 4) << "M\n"
+    << "#SBATCH --chdir=" << plan.directory << "\n"
+    << "#SBATCH --output=" << s.log_dir << "/" << name << "-%j.out\n";
+  for (const std::string& extra : s.sbatch) o << "#SBATCH " << extra << "\n";
+  o << "exec " << shell_word(s.hbil) << " farm check " << shell_word(s.plan_path) << " --sbatch "
+    << shell_word(array_script) << "\n";
+  return o.str();
+}
+
+}  // namespace hbil::pipeline
