@@ -1,4 +1,4 @@
-// farm_test.cpp: `hbil farm`: frame lists written back, the pre-roll that keeps seams under
+// farm_test.cpp: `hbil farm`: the pre-roll that keeps seams under
 // the tolerance, the memory a task asks for, chunks that follow cuts, a chunk's run, the
 // check of a shot and the Slurm scripts. The job array on a real Slurm is tests/slurm/run.sh.
 #include "pipeline/farm.h"
@@ -12,7 +12,6 @@
 #include <vector>
 
 #include "hbil/error.h"
-#include "io/sequence.h"
 #include "test_util.h"
 
 namespace hbil {
@@ -21,22 +20,6 @@ namespace {
 namespace fs = std::filesystem;
 using test::contains;
 using test::q;
-
-TEST(FarmFrameList, CompactListsReadBackAsTheirFrames) {
-  using V = std::vector<int>;
-  const std::vector<std::pair<V, std::string>> cases = {{{1, 2, 3, 4}, "1-4"},
-                                                        {{1, 3, 5, 7}, "1-7x2"},
-                                                        {{1, 2, 3, 5}, "1-3,5"},
-                                                        {{1, 3}, "1,3"},
-                                                        {{-3, -2, -1, 0}, "-3-0"},
-                                                        {{7}, "7"},
-                                                        {{1, 2, 4, 6, 8, 9}, "1-2,4-8x2,9"},
-                                                        {{-10, -5, 0, 5}, "-10-5x5"}};
-  for (const auto& [frames, text] : cases) {
-    EXPECT_EQ(pipeline::compact_frame_list(frames), text);
-    EXPECT_EQ(io::parse_frame_list(text), frames) << text;
-  }
-}
 
 // The pre-roll follows the parameters' temporal memory: longer history, longer pre-roll; none
 // without a temporal chain. The fit (farm.cpp) gives 36 frames for the default 0.9 with

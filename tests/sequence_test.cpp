@@ -218,6 +218,22 @@ TEST(FrameList, MalformedListsAreUsageErrors) {
   EXPECT_THROW(parse_frame_list(std::string(1000000, '1')), Error);
 }
 
+TEST(FrameList, FormattedListsReadBackAsTheirFrames) {
+  using V = std::vector<int>;
+  const std::vector<std::pair<V, std::string>> cases = {{{1, 2, 3, 4}, "1-4"},
+                                                        {{1, 3, 5, 7}, "1-7x2"},
+                                                        {{1, 2, 3, 5}, "1-3,5"},
+                                                        {{1, 3}, "1,3"},
+                                                        {{-3, -2, -1, 0}, "-3-0"},
+                                                        {{7}, "7"},
+                                                        {{1, 2, 4, 6, 8, 9}, "1-2,4-8x2,9"},
+                                                        {{-10, -5, 0, 5}, "-10-5x5"}};
+  for (const auto& [frames, text] : cases) {
+    EXPECT_EQ(format_frame_list(frames), text);
+    EXPECT_EQ(parse_frame_list(text), frames) << text;
+  }
+}
+
 TEST(FrameNumberFromName, LastDigitGroupOfTheFileName) {
   EXPECT_EQ(frame_number_from_name("shot_0042.exr"), 42);
   EXPECT_EQ(frame_number_from_name("/r/v2/shot.0007.exr"), 7);

@@ -13,6 +13,7 @@
 #include "cli/commands.h"
 #include "hbil/error.h"
 #include "io/exr_output.h"
+#include "io/sequence.h"
 
 namespace hbil::cli {
 
@@ -74,7 +75,7 @@ void plan(const FarmOptions& o) {
   for (size_t i = 0; i < p.chunks.size(); ++i) {
     const pipeline::FarmChunk& c = p.chunks[i];
     std::printf("  chunk %zu: frames %s, pre-roll %d (%s)\n", i,
-                pipeline::compact_frame_list(c.frames).c_str(), c.preroll, c.starts.c_str());
+                io::format_frame_list(c.frames).c_str(), c.preroll, c.starts.c_str());
   }
 }
 
@@ -102,7 +103,7 @@ void check(const FarmOptions& o) {
     if (st.missing.empty()) continue;
     incomplete.push_back(i);
     std::printf("chunk %zu (frames %s): %zu frame%s not done, the first: %s\n", i,
-                pipeline::compact_frame_list(p.chunks[i].frames).c_str(), st.missing.size(),
+                io::format_frame_list(p.chunks[i].frames).c_str(), st.missing.size(),
                 st.missing.size() == 1 ? "" : "s", st.why.c_str());
   }
   if (incomplete.empty()) {

@@ -186,6 +186,31 @@ std::vector<int> parse_frame_list(const std::string& text, const std::string& op
   return frames;
 }
 
+std::string format_frame_list(const std::vector<int>& f) {
+  std::string out;
+  for (size_t a = 0; a < f.size();) {
+    size_t b = a;
+    if (a + 1 < f.size()) {
+      const long long step = (long long)(f[a + 1]) - f[a];
+      while (b + 1 < f.size() && (long long)(f[b + 1]) - f[b] == step) ++b;
+      // A run of two with a step is two frames, not a range.
+      if (step != 1 && b == a + 1) b = a;
+    }
+    if (!out.empty()) out += ',';
+    out += std::to_string(f[a]);
+    if (b > a) {
+      out += '-';
+      out += std::to_string(f[b]);
+      if (f[a + 1] - f[a] != 1) {
+        out += 'x';
+        out += std::to_string(f[a + 1] - f[a]);
+      }
+    }
+    a = b + 1;
+  }
+  return out;
+}
+
 std::optional<int> frame_number_from_name(const std::string& path) {
   const std::string stem = fs::path(path).stem().string();
   size_t end = stem.size();

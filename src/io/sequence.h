@@ -56,6 +56,9 @@ class FramePattern {
 constexpr int kMaxFrames = 1000000;
 constexpr int kMaxFrame = 999999999;
 std::vector<int> parse_frame_list(const std::string& text, const std::string& option = "--frames");
+// The inverse: ascending frames -> the shortest list of ranges and steps that parse_frame_list
+// reads back as them: {1, 2, 3, 5} -> "1-3,5", {1, 3, 5, 7} -> "1-7x2".
+std::string format_frame_list(const std::vector<int>& frames);
 
 // Frame number of a single file from the last digit group of its file name without the
 // extension: "dir/shot_0042.exr" -> 42, "a.0007.exr" -> 7; nullopt when the name has no

@@ -30,6 +30,12 @@ std::string shell_word(const std::string& w) {
   return q + "'";
 }
 
+// The Slurm job name: as given, else "hbil-" and the shot's folder.
+std::string job_name(const FarmPlan& plan, const SlurmSettings& s) {
+  if (!s.job_name.empty()) return s.job_name;
+  return "hbil-" + fs::path(plan.shot).parent_path().filename().string();
+}
+
 }  // namespace
 
 int seam_preroll(const Params& p, std::string* why) {
@@ -66,26 +72,6 @@ int run_memory_mb(int width, int height) {
   const double mpx = double(width) * double(height) / 1e6;
   const bool overlap = double(width) * double(height) <= double(1 << 22);
   return int(std::ceil(144 + (overlap ? 452 : 152) * mpx));
-}
-
-std::string compact_frame_list(const std::vector<int>& f) {
-  std::string out;
-  for (size_t a = 0; a < f.size();) {
-    size_t b = a;
-    if (a + 1 < f.size()) {
-      const long long step = (long long)(f[a + 1]) - f[a];
-      while (b + 1 < f.size() && (long long)(f[b + 1]) - f[b] == step) ++b;
-      // A run of two with a step is two frames, not a range.
-      if (step != 1 && b == a + 1) b = a;
-    }
-    out += (out.empty() ? "" : ",") + std::to_string(f[a]);
-    if (b > a) {
-      out += "-" + std::to_string(f[b]);
-      if (f[a + 1] - f[a] != 1) out += "x" + std::to_string(f[a + 1] - f[a]);
-    }
-    a = b + 1;
-  }
-  return out;
 }
 
 FarmPlan make_farm_plan(const FarmRequest& r, const Params& requested) {
@@ -187,7 +173,7 @@ nlohmann::ordered_json to_json(const FarmPlan& plan) {
   j["memory_mb"] = plan.memory_mb;
   auto& chunks = j["chunks"] = nlohmann::ordered_json::array();
   for (const FarmChunk& c : plan.chunks)
-    chunks.push_back({{"frames", compact_frame_list(c.frames)},
+    chunks.push_back({{"frames", io::format_frame_list(c.frames)},
                       {"first", c.frames.front()},
                       {"last", c.frames.back()},
                       {"count", c.frames.size()},
@@ -232,7 +218,7 @@ std::vector<std::string> chunk_run_args(const FarmPlan& plan, size_t index, int 
                                         const std::string& log_json) {
   const FarmChunk& c = plan.chunks.at(index);
   std::vector<std::string> a = plan.run;
-  a.insert(a.end(), {"--frames", compact_frame_list(c.frames), "--preroll",
+  a.insert(a.end(), {"--frames", io::format_frame_list(c.frames), "--preroll",
                      std::to_string(c.preroll), "--skip-existing"});
   if (!plan.cut_frames.empty()) a.insert(a.end(), {"--cut-frames", plan.cut_frames});
   if (threads > 0) a.insert(a.end(), {"--threads", std::to_string(threads)});
@@ -247,7 +233,7 @@ ChunkState check_chunk(const FarmPlan& plan, size_t index, const Params& params,
   const FarmChunk& c = plan.chunks.at(index);
   try {
     const SequencePlan seq =
-        plan_sequence(plan.shot, compact_frame_list(c.frames), c.preroll, plan.cut_frames);
+        plan_sequence(plan.shot, io::format_frame_list(c.frames), c.preroll, plan.cut_frames);
     const SequenceJob job(seq, params);
     const FrameOutput out(output, job);
     for (int f : c.frames) {
@@ -267,9 +253,7 @@ ChunkState check_chunk(const FarmPlan& plan, size_t index, const Params& params,
 }
 
 std::string slurm_array_script(const FarmPlan& plan, const SlurmSettings& s) {
-  const std::string name = s.job_name.empty()
-                               ? "hbil-" + fs::path(plan.shot).parent_path().filename().string()
-                               : s.job_name;
+  const std::string name = job_name(plan, s);
   // The plan's estimate with a quarter more, at least 512 MB: Slurm ends a task that passes
   // its --mem.
   const int memory =
@@ -300,10 +284,7 @@ std::string slurm_array_script(const FarmPlan& plan, const SlurmSettings& s) {
 
 std::string slurm_check_script(const FarmPlan& plan, const SlurmSettings& s,
                                const std::string& array_script) {
-  const std::string name =
-      (s.job_name.empty() ? "hbil-" + fs::path(plan.shot).parent_path().filename().string()
-                          : s.job_name) +
-      "-check";
+  const std::string name = job_name(plan, s) + "-check";
   std::ostringstream o;
   o << "#!/bin/bash\n"
     << "# hbil farm slurm: after the job array, checks that every frame of the plan is in\n"

@@ -65,9 +65,6 @@ nlohmann::ordered_json to_json(const FarmPlan& plan);
 // Throws Error(Exit::input, "<where>: ...") for a plan that is not one.
 FarmPlan farm_plan_from_json(const nlohmann::json& j, const std::string& where);
 
-// "1-50", "1-49x2", "3,7,9-12": a frame list parse_frame_list reads back as `frames`.
-std::string compact_frame_list(const std::vector<int>& frames);
-
 // The options of chunk `index`'s run after INPUT: the plan's, then --frames, --preroll,
 // --cut-frames, --skip-existing (a task run again resumes), and `threads` when > 0 and
 // `log_json` when not empty.

@@ -87,8 +87,8 @@ std::string file_identity(const std::string& path) {
 }
 
 // Whether an image file opens and its first and last rows read (a file cut short loses its
-// last rows first); `why` says what failed.
-bool reads_whole(const std::string& path, std::string& why) {
+// last rows first); `why` says what failed. `job`: receives its hbil:job attribute.
+bool reads_whole(const std::string& path, std::string& why, std::string* job = nullptr) {
   std::error_code ec;
   if (!fs::is_regular_file(path, ec)) {
     why = path + " is missing";
@@ -101,6 +101,7 @@ bool reads_whole(const std::string& path, std::string& why) {
     return false;
   }
   const OIIO::ImageSpec& spec = in->spec();
+  if (job) *job = spec.get_string_attribute("hbil:job");
   std::vector<float> row(size_t(std::max(spec.width, 1)) * size_t(std::max(spec.nchannels, 1)));
   for (int y : {spec.y, spec.y + spec.height - 1})
     if (!in->read_scanline(y, 0, OIIO::TypeDesc::FLOAT, row.data())) {
@@ -191,11 +192,9 @@ FrameOutput::FrameOutput(const OutputSettings& s, const SequenceJob& job)
 }
 
 bool FrameOutput::done(int frame, std::string* why) const {
-  std::string reason;
-  bool ok = reads_whole(out_.path(frame), reason);
+  std::string reason, made;
+  bool ok = reads_whole(out_.path(frame), reason, &made);
   if (ok) {
-    auto in = OIIO::ImageInput::open(out_.path(frame));
-    const std::string made = in ? in->spec().get_string_attribute("hbil:job") : "";
     if (made != job(frame)) {
       ok = false;
       reason =

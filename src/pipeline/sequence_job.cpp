@@ -168,19 +168,17 @@ void SequenceJob::run(const Hooks& hooks, Overlap overlap_mode, const SH9* given
   // so that a resumed run computes what an uninterrupted one does.
   const bool temporal = p_.temporal && order.size() > 1;
   if (!done.empty()) {
-    if (temporal) {
-      while (!order.empty() && order.size() > plan_.preroll.size() && done.count(order.back()))
-        order.pop_back();
-      if (order.size() == plan_.preroll.size()) order.clear();  // every frame is done
-    } else {
-      std::vector<int> kept;
-      for (size_t k = 0; k < order.size(); ++k)
-        if (k < plan_.preroll.size() || !done.count(order[k])) kept.push_back(order[k]);
-      order = kept;
-      if (order.size() == plan_.preroll.size()) order.clear();
-    }
+    // Nothing after the last frame to deliver is needed; without a chain, no done frame is.
+    const size_t npre = plan_.preroll.size();
+    const auto to_deliver = [&](size_t k) { return k >= npre && !done.count(order[k]); };
+    size_t end = order.size();
+    while (end > npre && !to_deliver(end - 1)) --end;
+    std::vector<int> kept;
+    for (size_t k = 0; k < end && end > npre; ++k)
+      if (temporal || k < npre || to_deliver(k)) kept.push_back(order[k]);
+    order = kept;
   }
-  if (order.empty()) return;
+  if (order.empty()) return;  // every frame is done
   // The sequence's step: frames rendered on twos are no gap.
   int step = 0;
   for (size_t k = 1; k < order.size(); ++k)
