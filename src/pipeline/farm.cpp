@@ -47,8 +47,10 @@ int seam_preroll(const Params& p, std::string* why) {
   // composite (relative RMSE), and the difference fades by a factor r a frame: the history
   // keeps history_weight of itself, and the light fed back through it (feedback) a fifth of
   // what the accumulation lets go. Fitted on two 64-frame moves (samples/blender study_shots.py
-  // and room_shots.py --shot long, README "On the farm"): 0.9 gives r = 0.92, where 0.89 and
-  // 0.83 were measured, 0.8 gives 0.84 (measured 0.84 and 0.77), 0.7 gives 0.76 (0.79, 0.72).
+  // and room_shots.py --shot long, README "On the farm"; bench/seam.sh, chunk at frame 41):
+  // 0.9 gives r = 0.92, where 0.89 (room) and 0.83 (study) were measured between 16 and 24
+  // frames of pre-roll; 0.8 gives 0.84 (measured 0.84 and 0.79 between 8 and 16), 0.7 gives
+  // 0.76 (0.79 and 0.75).
   constexpr double kColdDifference = 0.02;
   const double w = std::clamp(p.history_weight, 0.0, 0.99);
   const double r = w + (1 - w) * (p.feedback ? 0.2 : 0.0);
