@@ -168,10 +168,21 @@ TEST_F(Farm, ChunksRunAndCheckedMakeTheWholeRun) {
   const auto bad = hbil("farm run " + q(dir / "plan.json") + " --chunk 3");
   EXPECT_EQ(bad.code, int(Exit::usage));
   EXPECT_TRUE(contains(bad.err, "chunks 0-2")) << bad.err;
-  test::write_text(dir / "broken.json", "{\"chunks\": []}");
-  const auto broken = hbil("farm check " + q(dir / "broken.json"));
-  EXPECT_EQ(broken.code, int(Exit::input));
-  EXPECT_TRUE(contains(broken.err, "not a farm plan")) << broken.err;
+  // Plans that are not plans: each exit 3 naming the file, none a crash.
+  nlohmann::json j = plan_json();
+  j["chunks"][1]["preroll"] = 2000000000;
+  nlohmann::json k = plan_json();
+  k["chunks"][0]["frames"] = "1-x";
+  for (const std::string& text : {std::string("{\"chunks\": []}"), std::string("[1, 2"),
+                                  std::string("{}"), j.dump(), k.dump()}) {
+    test::write_text(dir / "broken.json", text);
+    for (const std::string& cmd :
+         {"farm check ", "farm run --chunk 0 ", "farm slurm -o x.sbatch "}) {
+      const auto broken = hbil(cmd + q(dir / "broken.json"));
+      EXPECT_EQ(broken.code, int(Exit::input)) << cmd << text << broken.err;
+      EXPECT_TRUE(contains(broken.err, dir / "broken.json")) << broken.err;
+    }
+  }
 }
 
 // The job array: one task per chunk, cores given to run as threads, memory from the plan, a

@@ -204,7 +204,9 @@ FarmPlan farm_plan_from_json(const nlohmann::json& j, const std::string& where) 
       chunk.frames = io::parse_frame_list(c.at("frames").get<std::string>(), "chunk frames");
       chunk.preroll = c.at("preroll").get<int>();
       chunk.starts = c.value("starts", "");
-      if (chunk.preroll < 0) throw std::invalid_argument("negative pre-roll");
+      if (chunk.preroll < 0 || chunk.preroll > io::kMaxFrames)
+        throw std::invalid_argument("a chunk's pre-roll is not 0 to " +
+                                    std::to_string(io::kMaxFrames));
       plan.chunks.push_back(std::move(chunk));
     }
   } catch (const Error& e) {
@@ -213,6 +215,9 @@ FarmPlan farm_plan_from_json(const nlohmann::json& j, const std::string& where) 
     throw Error(Exit::input, where + ": not a farm plan (" + e.what() + ")");
   }
   if (plan.chunks.empty()) throw Error(Exit::input, where + ": not a farm plan (no chunks)");
+  if (plan.memory_mb < 0 || plan.memory_mb > (1 << 24))
+    throw Error(Exit::input,
+                where + ": not a farm plan (memory_mb " + std::to_string(plan.memory_mb) + ")");
   return plan;
 }
 
