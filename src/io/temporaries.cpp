@@ -10,6 +10,7 @@
 #include <cerrno>
 #include <climits>
 #include <cstring>
+#include <ctime>
 #include <mutex>
 #include <regex>
 
@@ -82,16 +83,34 @@ std::atomic<int> log_fd{-1};  // RunLog's file, for the "end" line of an interru
 // is whole, so that it is either all in place and counted, or not at all.
 std::atomic<int> committing{0};
 std::atomic<int> pending_signal{0};
+// Set by the first interrupt: from then on no thread starts a temporary or a commit (they
+// wait to be ended with the process), so that none appears after the handler removed them.
+std::atomic<int> dying{0};
+
+[[noreturn]] void wait_for_the_end() noexcept {
+  for (;;) pause();
+}
+
+void remove_registered() noexcept {
+  for (Slot& s : slots)
+    if (s.state.load(std::memory_order_acquire) == 2) ::unlink(s.path);
+}
 
 extern "C" void on_interrupt(int sig) {
+  dying.store(1);
   if (committing.load()) {
     pending_signal.store(sig);
     // Unless the commit ended meanwhile without seeing it: whoever takes it handles it.
     if (committing.load() || pending_signal.exchange(0) == 0) return;
   }
   const int saved = errno;
-  for (Slot& s : slots)
-    if (s.state.load(std::memory_order_acquire) == 2) ::unlink(s.path);
+  // A thread may be creating the file of a temporary it registered just before: the second
+  // pass, once such a file is open, removes it (the writers open theirs right after
+  // prepare_temporary).
+  remove_registered();
+  const timespec settle{0, 50 * 1000 * 1000};
+  nanosleep(&settle, nullptr);
+  remove_registered();
   say("\nhbil: interrupted (signal ");
   say(sig);
   say("): ");
@@ -146,6 +165,7 @@ std::string prepare_temporary(const std::string& final_path, const std::string& 
   name += final_p.extension().string();
   const std::string path = (final_p.parent_path() / name).string();
   register_temporary(path);
+  if (dying.load()) wait_for_the_end();  // interrupted: the file is not to be created
   return path;
 }
 
@@ -182,6 +202,13 @@ void install_interrupt_cleanup() {
 
 FrameCommit::FrameCommit() noexcept {
   committing.fetch_add(1);
+  if (dying.load()) {
+    // Interrupted: no new commit. A signal left to the commits in flight is handled by the
+    // last of them, which may be this one.
+    if (committing.fetch_sub(1) == 1)
+      if (const int sig = pending_signal.exchange(0)) on_interrupt(sig);
+    wait_for_the_end();
+  }
 }
 FrameCommit::~FrameCommit() {
   if (committing.fetch_sub(1) != 1) return;
