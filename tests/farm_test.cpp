@@ -45,6 +45,21 @@ TEST(FarmPreroll, FollowsTheTemporalMemory) {
   EXPECT_TRUE(contains(why, "no temporal chain")) << why;
 }
 
+// With history_window W the memory is finite: 2W − 2 frames at most, 3 more for the light
+// fed back; a chunk that starts where a chain restarts next needs W − 1 + 3.
+TEST(FarmPreroll, AFiniteWindowNeedsItsMemory) {
+  Params p;
+  p.history_window = 6;
+  std::string why;
+  EXPECT_EQ(pipeline::seam_preroll(p, &why), 13);
+  EXPECT_TRUE(contains(why, "history_window 6")) << why;
+  EXPECT_EQ(pipeline::window_preroll(p, 47, 1), 8);  // (47 + 1) mod 12 = 0
+  EXPECT_EQ(pipeline::window_preroll(p, 46, 1), 13);
+  EXPECT_EQ(pipeline::window_preroll(p, 46, 2), 8);  // 10 frame numbers at a step of 2
+  p.temporal = false;
+  EXPECT_EQ(pipeline::window_preroll(p, 47, 1), 0);
+}
+
 // From the peaks the README measures: 161 MB at 256x144, 1081 MB at 1920x1080 (overlap),
 // 1403 MB at 3840x2160 (no overlap), each within 2 %.
 TEST(FarmMemory, FitsTheMeasuredPeaks) {
@@ -97,6 +112,26 @@ TEST_F(Farm, PlanFollowsTheCuts) {
   EXPECT_EQ(k["chunks"][2]["frames"], "6");
   EXPECT_EQ(k["chunks"][2]["starts"], "cut: given");
   EXPECT_EQ(k["chunks"][2]["preroll"], 0);
+}
+
+// With history_window 2 (restarts every 4 frames) and --chunk 3, chunks start within 2
+// frames of every third, at 3 and 7, where a chain restarts next: each needs 1 + 3 frames of
+// pre-roll, the first of them only 2 (the shot's start).
+TEST_F(Farm, AFiniteWindowPlacesTheChunksWhereTheyNeedLeast) {
+  const std::string shot = test::kRoomPoles + "/frame_####.exr";
+  const auto r = hbil("farm plan " + q(shot) + " -o " + q(dir / "plan.json") +
+                      " --chunk 3 -q -- --set history_window=2 -o " + q(dir / "out/f_####.exr"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  const nlohmann::json j = plan_json();
+  const auto& c = j["chunks"];
+  ASSERT_EQ(c.size(), 3u) << j.dump(2);
+  const std::vector<std::string> frames = {"1-2", "3-6", "7-8"};
+  const std::vector<int> preroll = {0, 2, 4};
+  for (size_t i = 0; i < 3; ++i) {
+    EXPECT_EQ(c[i]["frames"], frames[i]) << i;
+    EXPECT_EQ(c[i]["preroll"], preroll[i]) << i;
+  }
+  EXPECT_EQ(j["preroll"], 5);
 }
 
 TEST_F(Farm, PlanRefusesWhatItCannotPlan) {

@@ -131,6 +131,11 @@ TEST(Params, OutOfRangeNamesKeyValueAndRange) {
         params_from_json(json{{"depth_tolerance", 1.5}}, "a.json");
       },
       Exit::preset, {"'depth_tolerance'", "1.5", "[0, 1]"});
+  expect_error(
+      [] {
+        params_from_json(json{{"history_window", 1}}, "a.json");
+      },
+      Exit::preset, {"a.json", "'history_window' = 1", "at least 2"});
 }
 
 // Every numeric row of the table: its bounds are accepted, values beyond them are not.

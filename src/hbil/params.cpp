@@ -106,6 +106,11 @@ const std::vector<ParamInfo>& params_table() {
       {"history_max", &Params::history_max, 1, 1024, "frames",
        "temporal: a pixel with n frames of history blends the current one with weight "
        "max(1/n, 1 - history_weight), n capped here"},
+      {"history_window", &Params::history_window, 0, 64, "frames",
+       "temporal: 0: the exponential blend of history_weight and history_max; W >= 2: a "
+       "memory of at most 2W - 2 frames (two plain means restarted every 2W frames, W apart, "
+       "blended so that neither restart shows), so that a farm chunk with 2W - 2 frames of "
+       "pre-roll starts as the whole run would"},
       {"history_depth_tolerance", &Params::history_depth_tolerance, 0, 1, "relative",
        "temporal: history whose reprojected depth differs by more than this fraction is "
        "rejected"},
@@ -333,6 +338,8 @@ void validate(const Params& p, const std::string& where) {
         },
         info.member);
   }
+  if (p.history_window == 1)
+    fail(where, "key 'history_window' = 1: it is 0 (exponential blend) or at least 2");
   if (p.method != "horizon" && p.method != "bitmask")
     fail(where, "key 'method' = \"" + p.method + "\" is not one of \"horizon\", \"bitmask\"");
   if (p.reprojection != "auto" && p.reprojection != "scatter" && p.reprojection != "vector")

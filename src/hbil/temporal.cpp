@@ -35,7 +35,34 @@ double turn_degrees(const Mat3d& a, const Mat3d& b) {
   return std::acos(c) * 180 / std::numbers::pi;
 }
 
+// history_window W: chain c (0 or 1) restarts at the frames F with (F + cW) mod 2W = 0; at
+// age a = (F + cW) mod 2W it has a + 1 frames and weighs a² (2W − 1 − a) in the blend: 0 at
+// its first frame and at its last, so that its restart never shows, and more as it holds
+// more frames (for i.i.d. frames, a mean of 6.5 frames' worth at W = 5, where a (2W − 1 − a)
+// gives 5.6, with smaller changes from frame to frame). The other chain is then W frames
+// old, so the weights never both vanish (W >= 2).
+int window_age(int frame, int chain, int w) {
+  const int m = 2 * w, f = frame + chain * w;
+  return (f % m + m) % m;
+}
+int window_epoch(int frame, int chain, int w) {
+  const int m = 2 * w, f = frame + chain * w;
+  return f >= 0 ? f / m : -((m - 1 - f) / m);
+}
+float window_weight(int frame, int chain, int w) {
+  const int a = window_age(frame, chain, w);
+  return float(a) * float(a) * float(2 * w - 1 - a);
+}
+
 }  // namespace
+
+int window_memory(int window, int frame) {
+  if (window <= 0) return 0;
+  int memory = 0;
+  for (int k = 0; k < 2; ++k)
+    if (window_weight(frame, k, window) > 0) memory = std::max(memory, window_age(frame, k, window));
+  return memory;
+}
 
 std::string camera_cut(const Camera& prev, const Camera& cur, double depth, const Params& p) {
   const double move = length(cur.centre() - prev.centre());
@@ -95,6 +122,10 @@ AoFrame TemporalChain::run(const GBuffer& g, GBuffer* release, const Camera& cam
   }
 
   // Reprojection of the history into this frame.
+  // With history_window, two chains of kChannels each (window_weight), then the frame's own
+  // irradiance before accumulation, which is what is fed back.
+  const int window = p_.history_window, chains = window > 0 ? 2 : 1;
+  const int channels = kChannels * chains + (window > 0 ? 3 : 0);
   Reprojected r;
   bool history = has_history_ && !cut;
   if (history) {
@@ -103,8 +134,8 @@ AoFrame TemporalChain::run(const GBuffer& g, GBuffer* release, const Camera& cam
     const bool vector = p_.reprojection == "vector" ||
                         (p_.reprojection == "auto" && !g.motion.empty() && frame == frame_ + 1);
     rep.reprojection = vector ? "vector" : "scatter";
-    r = vector ? reproject_gather(view_, cam_, data_, kChannels, v, cam, g.motion, tol)
-               : reproject_scatter(view_, cam_, data_, kChannels, v, cam, tol);
+    r = vector ? reproject_gather(view_, cam_, data_, channels, v, cam, g.motion, tol)
+               : reproject_scatter(view_, cam_, data_, channels, v, cam, tol);
     size_t accepted = 0;
     for (size_t i = 0; i < n_px; ++i) accepted += r.valid[i] != 0;
     rep.history = geometry ? double(accepted) / double(geometry) : 0;
@@ -134,8 +165,11 @@ AoFrame TemporalChain::run(const GBuffer& g, GBuffer* release, const Camera& cam
   std::vector<Vec3>& feedback = in.feedback;
   if (history && gather && p_.feedback) {
     std::vector<float> e(3 * n_px), depth(n_px);
+    // The history's accumulated irradiance; with history_window its frame's own, so that
+    // what is fed back forgets a cut-off past by a bounce per frame, not through the means.
+    const size_t e_at = window > 0 ? size_t(kChannels) * chains : 0;
     for (size_t i = 0; i < n_px; ++i) {
-      for (int c = 0; c < 3; ++c) e[3 * i + c] = r.value[kChannels * i + c];
+      for (int c = 0; c < 3; ++c) e[3 * i + c] = r.value[size_t(channels) * i + e_at + c];
       depth[i] = v.is_background(i) ? float(kBackgroundLimit) * 10 : v.position[i].z;
     }
     std::vector<uint8_t> filled;
@@ -159,42 +193,80 @@ AoFrame TemporalChain::run(const GBuffer& g, GBuffer* release, const Camera& cam
   // written over the reprojected history in place (each pixel reads its history before it
   // writes; background and rejected pixels hold 0 there, as a fresh buffer would).
   std::vector<float> next =
-      history ? std::move(r.value) : std::vector<float>(kChannels * n_px, 0.f);
+      history ? std::move(r.value) : std::vector<float>(size_t(channels) * n_px, 0.f);
   const bool has_e = !h.irradiance.empty();
+  // Each chain's weight in this frame's output, and whether it restarts here.
+  float wt[2] = {1.f, 0.f};
+  bool restart[2] = {false, false};
+  for (int k = 0; window > 0 && k < 2; ++k) {
+    wt[k] = window_weight(frame, k, window);
+    restart[k] = history && window_epoch(frame, k, window) != window_epoch(frame_, k, window);
+  }
+  const float wt_sum = wt[0] + wt[1];
+  std::vector<float> n_out(p_.wants("history") ? n_px : 0);
   tbb::parallel_for(0, v.height, [&](int y) {
     for (int x = 0; x < v.width; ++x) {
       const size_t i = size_t(y) * v.width + x;
       if (v.is_background(i)) continue;
-      float n = 1;
-      if (history && r.valid[i]) {
-        const float* hv = &next[kChannels * i];
-        n = std::min(hv[8] + 1.f, float(p_.history_max));
-        const float a = std::max(1.f / n, 1.f - float(p_.history_weight));
-        auto mix = [a](float old, float cur) { return old + a * (cur - old); };
-        if (has_e) {
-          Vec3& e = h.irradiance[i];
-          e = Vec3{mix(hv[0], e.x), mix(hv[1], e.y), mix(hv[2], e.z)};
-        }
-        h.ao[i] = mix(hv[3], h.ao[i]);
-        h.vis[i] = mix(hv[4], h.vis[i]);
-        const Vec3 b_old = Vec3(cam.world_dir_to_view(Vec3d(Vec3{hv[5], hv[6], hv[7]})));
-        h.bent[i] =
-            Vec3{mix(b_old.x, h.bent[i].x), mix(b_old.y, h.bent[i].y), mix(b_old.z, h.bent[i].z)};
+      // This frame's values; each chain blends them with its history, and the output is
+      // the chain's (or the chains' blend).
+      const Vec3 e_cur = has_e ? h.irradiance[i] : Vec3{};
+      const float ao_cur = h.ao[i], vis_cur = h.vis[i];
+      const Vec3 b_cur = h.bent[i];
+      if (window > 0) {
+        float* o = &next[size_t(channels) * i + size_t(kChannels) * chains];
+        o[0] = e_cur.x, o[1] = e_cur.y, o[2] = e_cur.z;
       }
-      float* o = &next[kChannels * i];
-      if (has_e) o[0] = h.irradiance[i].x, o[1] = h.irradiance[i].y, o[2] = h.irradiance[i].z;
-      o[3] = h.ao[i];
-      o[4] = h.vis[i];
-      const Vec3 bw = Vec3(cam.view_dir_to_world(Vec3d(h.bent[i])));
-      o[5] = bw.x, o[6] = bw.y, o[7] = bw.z;
-      o[8] = n;
+      Vec3 e_sum, b_sum;
+      float ao_sum = 0, vis_sum = 0, n_sum = 0;
+      for (int k = 0; k < chains; ++k) {
+        float* o = &next[size_t(channels) * i + size_t(kChannels) * k];
+        Vec3 e = e_cur, b = b_cur;
+        float ao = ao_cur, vis = vis_cur, n = 1;
+        if (history && r.valid[i] && !restart[k]) {
+          const float* hv = o;
+          float a;
+          if (window > 0) {
+            n = hv[8] + 1.f;
+            a = 1.f / n;
+          } else {
+            n = std::min(hv[8] + 1.f, float(p_.history_max));
+            a = std::max(1.f / n, 1.f - float(p_.history_weight));
+          }
+          auto mix = [a](float old, float cur) { return old + a * (cur - old); };
+          if (has_e) e = Vec3{mix(hv[0], e.x), mix(hv[1], e.y), mix(hv[2], e.z)};
+          ao = mix(hv[3], ao);
+          vis = mix(hv[4], vis);
+          const Vec3 b_old = Vec3(cam.world_dir_to_view(Vec3d(Vec3{hv[5], hv[6], hv[7]})));
+          b = Vec3{mix(b_old.x, b.x), mix(b_old.y, b.y), mix(b_old.z, b.z)};
+        }
+        if (has_e) o[0] = e.x, o[1] = e.y, o[2] = e.z;
+        o[3] = ao;
+        o[4] = vis;
+        const Vec3 bw = Vec3(cam.view_dir_to_world(Vec3d(b)));
+        o[5] = bw.x, o[6] = bw.y, o[7] = bw.z;
+        o[8] = n;
+        if (chains == 1) {
+          e_sum = e, b_sum = b, ao_sum = ao, vis_sum = vis, n_sum = n;
+        } else {
+          e_sum += e * wt[k], b_sum += b * wt[k];
+          ao_sum += ao * wt[k], vis_sum += vis * wt[k], n_sum += n * wt[k];
+        }
+      }
+      if (chains > 1) {
+        const float inv = 1.f / wt_sum;
+        e_sum = e_sum * inv, b_sum = b_sum * inv;
+        ao_sum *= inv, vis_sum *= inv, n_sum *= inv;
+      }
+      if (has_e) h.irradiance[i] = e_sum;
+      h.ao[i] = ao_sum;
+      h.vis[i] = vis_sum;
+      h.bent[i] = b_sum;
+      if (!n_out.empty()) n_out[i] = n_sum;
     }
   });
   AoFrame out = assemble_frame(v, g, cam, p_, std::move(h), environment, release);
-  if (p_.wants("history")) {
-    out.history.resize(n_px);
-    for (size_t i = 0; i < n_px; ++i) out.history[i] = next[kChannels * i + 8];
-  }
+  if (p_.wants("history")) out.history = std::move(n_out);
   view_ = std::move(v);
   cam_ = cam;
   frame_ = frame;

@@ -16,6 +16,14 @@
 // is long enough, then an exponential blend. A pixel without history starts at n = 1 with the
 // current frame, so newly revealed pixels converge as fast as the first frame did.
 //
+// With history_window W >= 2 the memory is finite instead: two chains, each a plain mean of
+// the frames since it last restarted, restart every 2W frame numbers, W apart, and the output
+// blends them with weights that vanish at each chain's first and last frame (temporal.cpp,
+// window_weight), so a frame's ao, vis and bent vector depend on at most the 2W − 2 frames
+// before it (window_memory), and a farm chunk with that much pre-roll computes them as the
+// whole run does, to the bit. The fed-back irradiance is then the previous frame's own,
+// before accumulation: it forgets a cut-off past by a bounce per frame, not through the means.
+//
 // Cuts: given by the caller (--cut-frames), or found: the camera moved farther than
 // cut_camera_jump × the frame's median depth or turned more than cut_camera_angle, or the
 // history was rejected on more than cut_rejected of the geometry pixels. A cut drops the
@@ -48,6 +56,10 @@ struct TemporalReport {
 // cut_camera_angle), else what it did ("camera moved 3.1 (median depth 2.4)").
 std::string camera_cut(const Camera& prev, const Camera& cur, double depth, const Params& p);
 
+// history_window `window` > 0: how many frame numbers before `frame` its accumulated values
+// reach back (the age of the oldest chain that weighs in it; 0 to 2·window − 2). 0 for 0.
+int window_memory(int window, int frame);
+
 class TemporalChain {
  public:
   // Outputs "auto" are resolved on the first frame (resolve_frame_outputs).
@@ -64,7 +76,8 @@ class TemporalChain {
 
   void reset() { has_history_ = false; }
 
-  // Per-pixel history channels: irradiance (3), ao, vis, bent vector in world space (3), n.
+  // Per-pixel history channels: irradiance (3), ao, vis, bent vector in world space (3), n;
+  // with history_window, two such groups (the chains) and the frame's own irradiance (3).
   static constexpr int kChannels = 9;
 
  private:

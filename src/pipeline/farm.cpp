@@ -38,10 +38,32 @@ std::string job_name(const FarmPlan& plan, const SlurmSettings& s) {
 
 }  // namespace
 
+int window_preroll(const Params& p, int frame, int step) {
+  if (!p.temporal || p.history_window <= 0) return 0;
+  const int memory = window_memory(p.history_window, frame);
+  return (memory + std::max(step, 1) - 1) / std::max(step, 1) + kFeedbackSettle;
+}
+
 int seam_preroll(const Params& p, std::string* why) {
   if (!p.temporal) {
     if (why) *why = "no temporal chain (temporal false): chunks need no pre-roll";
     return 0;
+  }
+  if (p.history_window > 0) {
+    // A frame's means reach back at most 2W − 2 frames (temporal.h); the irradiance fed back
+    // from before the chunk fades by a bounce a frame after that (bench/seam.sh on the two
+    // 64-frame moves: under 1.5e-4 with kFeedbackSettle = 2, at the worst start).
+    const int w = p.history_window;
+    const int preroll = 2 * w - 2 + kFeedbackSettle;
+    if (why) {
+      std::ostringstream s;
+      s << "history_window " << w << ": a frame's means reach back at most " << 2 * w - 2
+        << " frames, and " << kFeedbackSettle << " more let the light fed back settle; "
+        << "chunks start within " << w << " frames of every chunk_size where "
+        << w - 1 + kFeedbackSettle << " are enough";
+      *why = s.str();
+    }
+    return preroll;
   }
   // A chunk that starts cold differs from a whole run's frame there by kColdDifference of the
   // composite (relative RMSE), and the difference fades by a factor r a frame: the history
@@ -62,7 +84,8 @@ int seam_preroll(const Params& p, std::string* why) {
     s.precision(3);
     s << "a cold start's difference of " << kColdDifference << " fades by " << r
       << " a frame (history_weight " << p.history_weight << (p.feedback ? ", feedback" : "")
-      << ") to " << kSeamTolerance << " in " << preroll << " frames";
+      << ") to " << kSeamTolerance << " in " << preroll
+      << " frames (history_window 6 would need 8: man hbil)";
     *why = s.str();
   }
   return preroll;
@@ -95,6 +118,9 @@ FarmPlan make_farm_plan(const FarmRequest& r, const Params& requested) {
   plan.width = job.first().spec.width;
   plan.height = job.first().spec.height;
   plan.memory_mb = run_memory_mb(plan.width, plan.height);
+  // history_window keeps 12 more floats of history a pixel, twice while it is reprojected.
+  if (p.temporal && p.history_window > 0)
+    plan.memory_mb += int(std::ceil(2.0 * 12 * 4 * plan.width * double(plan.height) / 1e6));
   if (r.preroll == "auto") {
     plan.preroll = seam_preroll(p, &plan.preroll_why);
   } else {
@@ -111,13 +137,13 @@ FarmPlan make_farm_plan(const FarmRequest& r, const Params& requested) {
   // from rejected history is not known before the frames are computed).
   std::vector<std::pair<int, std::string>> cuts;
   for (int c : seq.cuts) cuts.emplace_back(c, "given");
+  // The sequence's step, as SequenceJob::run finds it: a frame whose predecessor at that
+  // step is missing starts without history too.
+  int step = 0;
+  for (size_t k = 1; k < seq.frames.size(); ++k)
+    if (step == 0 || seq.frames[k] - seq.frames[k - 1] < step)
+      step = seq.frames[k] - seq.frames[k - 1];
   if (p.temporal) {
-    // The sequence's step, as SequenceJob::run finds it: a frame whose predecessor at that
-    // step is missing starts without history too.
-    int step = 0;
-    for (size_t k = 1; k < seq.frames.size(); ++k)
-      if (step == 0 || seq.frames[k] - seq.frames[k - 1] < step)
-        step = seq.frames[k] - seq.frames[k - 1];
     Camera prev;
     for (size_t k = 0; k < seq.frames.size(); ++k) {
       const int f = seq.frames[k];
@@ -136,12 +162,23 @@ FarmPlan make_farm_plan(const FarmRequest& r, const Params& requested) {
   std::sort(cuts.begin(), cuts.end());
   for (const auto& c : cuts) plan.cuts.push_back(c.first);
   // Chunks: a new one at the shot's start, at each cut, and every chunk_size frames between.
+  // With history_window and an automatic pre-roll, within W frames of that, at the frame
+  // whose means reach back least (one chain restarting there: W − 1 frames), each chunk with
+  // its own pre-roll.
+  const int window = r.preroll == "auto" && p.temporal ? p.history_window : 0;
+  auto boundary = [&](size_t since_start, int f) {
+    const size_t n = size_t(r.chunk_size);
+    if (window == 0) return since_start == n;
+    const int m = 2 * window;
+    const bool least = ((f + 1) % m + m) % m == 0;
+    return (least && since_start + size_t(window) >= n) || since_start + 1 >= n + size_t(window);
+  };
   size_t since_start = 0;
   for (size_t k = 0; k < seq.frames.size(); ++k) {
     const int f = seq.frames[k];
     const auto cut = std::find_if(cuts.begin(), cuts.end(), [&](auto& c) { return c.first == f; });
     const bool at_cut = cut != cuts.end() && k > 0;
-    if (k == 0 || at_cut || since_start == size_t(r.chunk_size)) {
+    if (k == 0 || at_cut || boundary(since_start, f)) {
       FarmChunk c;
       c.starts = k == 0 ? "shot" : at_cut ? "cut: " + cut->second : "chunk";
       if (!at_cut && k > 0) {
@@ -149,7 +186,8 @@ FarmPlan make_farm_plan(const FarmRequest& r, const Params& requested) {
         int floor = seq.frames.front();
         for (const auto& cc : cuts)
           if (cc.first <= f) floor = std::max(floor, cc.first);
-        c.preroll = std::min(plan.preroll, f - floor);
+        const int want = window > 0 ? window_preroll(p, f, step) : plan.preroll;
+        c.preroll = std::min(want, f - floor);
       }
       plan.chunks.push_back(c);
       since_start = 0;

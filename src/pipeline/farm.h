@@ -3,7 +3,8 @@
 //
 // Chunks follow the shot's cuts: a cut (given with --cut-frames, or found from the camera as
 // the temporal chain finds it) starts a chunk, and that chunk needs no pre-roll; between cuts
-// the frames are cut into chunks of the plan's size, the last one shorter. Every other chunk
+// the frames are cut into chunks of the plan's size, the last one shorter (with
+// history_window, of about that size, where a chunk needs the least pre-roll). Every other chunk
 // computes its pre-roll first (never reaching back across a cut), so that its first frame
 // carries the history a run over the whole shot gives it.
 #pragma once
@@ -51,6 +52,11 @@ struct FarmRequest {
 // without a temporal chain.
 inline constexpr double kSeamTolerance = 1e-3;
 int seam_preroll(const Params& p, std::string* why = nullptr);
+// With history_window: the pre-roll of a chunk that starts at `frame` (frames at the
+// sequence's `step`): what its means reach back (window_memory) and kFeedbackSettle frames
+// more for the light fed back. 0 without.
+inline constexpr int kFeedbackSettle = 3;
+int window_preroll(const Params& p, int frame, int step);
 
 // Peak memory of one `hbil run` over frames of width x height, MB: a fit of the measured peaks
 // (README "Speed"), with the overlap on up to 2^22 pixels and off above, as run's "auto" does.
