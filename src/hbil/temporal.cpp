@@ -60,7 +60,8 @@ int window_memory(int window, int frame) {
   if (window <= 0) return 0;
   int memory = 0;
   for (int k = 0; k < 2; ++k)
-    if (window_weight(frame, k, window) > 0) memory = std::max(memory, window_age(frame, k, window));
+    if (window_weight(frame, k, window) > 0)
+      memory = std::max(memory, window_age(frame, k, window));
   return memory;
 }
 

@@ -137,12 +137,8 @@ FarmPlan make_farm_plan(const FarmRequest& r, const Params& requested) {
   // from rejected history is not known before the frames are computed).
   std::vector<std::pair<int, std::string>> cuts;
   for (int c : seq.cuts) cuts.emplace_back(c, "given");
-  // The sequence's step, as SequenceJob::run finds it: a frame whose predecessor at that
-  // step is missing starts without history too.
-  int step = 0;
-  for (size_t k = 1; k < seq.frames.size(); ++k)
-    if (step == 0 || seq.frames[k] - seq.frames[k - 1] < step)
-      step = seq.frames[k] - seq.frames[k - 1];
+  // A frame whose predecessor at the sequence's step is missing starts without history too.
+  const int step = sequence_step(seq.frames);
   if (p.temporal) {
     Camera prev;
     for (size_t k = 0; k < seq.frames.size(); ++k) {

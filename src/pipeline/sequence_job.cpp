@@ -180,10 +180,7 @@ void SequenceJob::run(const Hooks& hooks, Overlap overlap_mode, const SH9* given
   }
   if (order.empty()) return;  // every frame is done
   // The sequence's step: frames rendered on twos are no gap.
-  int step = 0;
-  for (size_t k = 1; k < order.size(); ++k)
-    if (order[k] > order[k - 1] && (step == 0 || order[k] - order[k - 1] < step))
-      step = order[k] - order[k - 1];
+  const int step = sequence_step(order);
   std::optional<TemporalChain> chain;
   if (temporal) chain.emplace(p_);
   const bool overlap = overlaps(overlap_mode);
@@ -290,6 +287,14 @@ void SequenceJob::run(const Hooks& hooks, Overlap overlap_mode, const SH9* given
     if (next.valid()) next.wait();
     throw;
   }
+}
+
+int sequence_step(const std::vector<int>& frames) {
+  int step = 0;
+  for (size_t k = 1; k < frames.size(); ++k)
+    if (frames[k] > frames[k - 1] && (step == 0 || frames[k] - frames[k - 1] < step))
+      step = frames[k] - frames[k - 1];
+  return step;
 }
 
 }  // namespace hbil::pipeline

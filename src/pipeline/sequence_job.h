@@ -128,4 +128,9 @@ class SequenceJob {
   std::optional<SH9> environment_;
 };
 
+// The step of a sequence's frames, ascending: the smallest difference between consecutive
+// frame numbers (frames rendered on twos: 2), 0 for fewer than two frames. With a temporal
+// chain, a frame whose predecessor at this step is missing starts without history.
+int sequence_step(const std::vector<int>& frames);
+
 }  // namespace hbil::pipeline
