@@ -38,9 +38,9 @@ double turn_degrees(const Mat3d& a, const Mat3d& b) {
 // history_window W: chain c (0 or 1) restarts at the frames F with (F + cW) mod 2W = 0; at
 // age a = (F + cW) mod 2W it has a + 1 frames and weighs a² (2W − 1 − a) in the blend: 0 at
 // its first frame and at its last, so that its restart never shows, and more as it holds
-// more frames (for i.i.d. frames, a mean of 6.5 frames' worth at W = 5, where a (2W − 1 − a)
-// gives 5.6, with smaller changes from frame to frame). The other chain is then W frames
-// old, so the weights never both vanish (W >= 2).
+// more frames (for independent frames, an effective count of 6.5 frames at W = 5, where
+// a (2W − 1 − a) gives 5.6, and smaller changes from frame to frame). The other chain is then W
+// frames old, so the weights never both vanish (W >= 2).
 int window_age(int frame, int chain, int w) {
   const int m = 2 * w, f = frame + chain * w;
   return (f % m + m) % m;

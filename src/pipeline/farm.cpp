@@ -52,7 +52,8 @@ int seam_preroll(const Params& p, std::string* why) {
   if (p.history_window > 0) {
     // A frame's means reach back at most 2W − 2 frames (temporal.h); the irradiance fed back
     // from before the chunk fades by a bounce a frame after that (bench/seam.sh on the two
-    // 64-frame moves: under 1.5e-4 with kFeedbackSettle = 2, at the worst start).
+    // 64-frame moves, W = 6: at most 1.5e-4 at the starts the plan picks, with W − 1 +
+    // kFeedbackSettle = 8 frames; 7.8e-5 at the worst start, with 2W − 2 + 3 = 13).
     const int w = p.history_window;
     const int preroll = 2 * w - 2 + kFeedbackSettle;
     if (why) {
@@ -84,8 +85,8 @@ int seam_preroll(const Params& p, std::string* why) {
     s.precision(3);
     s << "a cold start's difference of " << kColdDifference << " fades by " << r
       << " a frame (history_weight " << p.history_weight << (p.feedback ? ", feedback" : "")
-      << ") to " << kSeamTolerance << " in " << preroll
-      << " frames (history_window 6 would need 8: man hbil)";
+      << ") to " << kSeamTolerance << " in " << preroll << " frames (history_window 6 would need "
+      << 6 - 1 + kFeedbackSettle << ": man hbil)";
     *why = s.str();
   }
   return preroll;
