@@ -100,6 +100,62 @@ Reprojected reproject_scatter(const ViewGBuffer& prev, const Camera& prev_cam,
   return r;
 }
 
+namespace {
+
+// The history of one current pixel from its previous-frame neighbours, C channels (C = 0:
+// `channels` at run time), in floats, as the values are stored.
+template <int C>
+void gather_row(const ViewGBuffer& prev, const std::vector<float>& prev_value, int channels,
+                const ViewGBuffer& cur, const std::vector<float>& motion, const Mat3d& M,
+                const Vec3d& m, const ReprojectTolerance& tol, int y, Reprojected& r) {
+  const int nc = C > 0 ? C : channels;
+  std::vector<float> acc_store(C > 0 ? 0 : size_t(nc));
+  float acc_fixed[C > 0 ? C : 1];
+  float* acc = C > 0 ? acc_fixed : acc_store.data();
+  const float normal_cos = tol.normal_cos;
+  for (int x = 0; x < cur.width; ++x) {
+    const size_t i = size_t(y) * cur.width + x;
+    if (cur.is_background(i)) continue;
+    const double du = motion[2 * i], dv = motion[2 * i + 1];
+    if (!std::isfinite(du) || !std::isfinite(dv)) continue;
+    // Previous raster (x + 0.5 + du, y + 0.5 + dv); pixel centres sit at integer + 0.5.
+    const double px = x + du, py = y + dv;
+    const double fx0 = std::floor(px), fy0 = std::floor(py);
+    // Entirely off the previous image (also guards the int conversion below).
+    if (!(fx0 >= -1 && fx0 < prev.width && fy0 >= -1 && fy0 < prev.height)) continue;
+    const int x0 = int(fx0), y0 = int(fy0);
+    const float ax = float(px - fx0), ay = float(py - fy0);
+    const float max_dist = tol.depth * cur.position[i].z;
+    const float max_dist2 = max_dist * max_dist;
+    // The pixel's point and normal in the previous frame's view space, once, so that the four
+    // neighbours are compared where they are stored (distances and angles are the same).
+    const Vec3 pp = Vec3(M * Vec3d(cur.position[i]) + m);
+    const Vec3 np = Vec3(M * Vec3d(cur.normal[i]));
+    for (int c = 0; c < nc; ++c) acc[c] = 0.f;
+    float wsum = 0;
+    for (int k = 0; k < 4; ++k) {
+      const int xx = x0 + (k & 1), yy = y0 + (k >> 1);
+      const float w = ((k & 1) ? ax : 1 - ax) * ((k >> 1) ? ay : 1 - ay);
+      if (!(w > 0) || xx < 0 || xx >= prev.width || yy < 0 || yy >= prev.height) continue;
+      const size_t s = size_t(yy) * prev.width + xx;
+      if (prev.is_background(s)) continue;
+      const Vec3 d = prev.position[s] - pp;
+      if (!(dot(d, d) <= max_dist2)) continue;
+      if (!(dot(prev.normal[s], np) >= normal_cos)) continue;
+      wsum += w;
+      const float* v = prev_value.data() + s * size_t(nc);
+      for (int c = 0; c < nc; ++c) acc[c] += w * v[c];
+    }
+    if (!(wsum > 0)) continue;
+    r.valid[i] = 1;
+    const float inv = 1 / wsum;
+    float* out = r.value.data() + i * size_t(nc);
+    for (int c = 0; c < nc; ++c) out[c] = acc[c] * inv;
+  }
+}
+
+}  // namespace
+
 Reprojected reproject_gather(const ViewGBuffer& prev, const Camera& prev_cam,
                              const std::vector<float>& prev_value, int channels,
                              const ViewGBuffer& cur, const Camera& cur_cam,
@@ -114,45 +170,15 @@ Reprojected reproject_gather(const ViewGBuffer& prev, const Camera& prev_cam,
   // The current view space to the previous one in one rigid motion: v' = M v + m.
   const Mat3d M = prev_cam.R * cur_cam.R.transposed();
   const Vec3d m = prev_cam.t - M * cur_cam.t;
+  // The temporal chain's channel counts get a loop of fixed length (9: its history; 21: with
+  // history_window); any other count the general one.
   tbb::parallel_for(0, cur.height, [&](int y) {
-    std::vector<double> acc(static_cast<size_t>(channels));
-    for (int x = 0; x < cur.width; ++x) {
-      const size_t i = size_t(y) * cur.width + x;
-      if (cur.is_background(i)) continue;
-      const double du = motion[2 * i], dv = motion[2 * i + 1];
-      if (!std::isfinite(du) || !std::isfinite(dv)) continue;
-      // Previous raster (x + 0.5 + du, y + 0.5 + dv); pixel centres sit at integer + 0.5.
-      const double px = x + du, py = y + dv;
-      const double fx0 = std::floor(px), fy0 = std::floor(py);
-      // Entirely off the previous image (also guards the int conversion below).
-      if (!(fx0 >= -1 && fx0 < prev.width && fy0 >= -1 && fy0 < prev.height)) continue;
-      const int x0 = int(fx0), y0 = int(fy0);
-      const double ax = px - fx0, ay = py - fy0;
-      const double zc = cur.position[i].z;
-      const double max_dist = double(tol.depth) * zc;
-      // The pixel's point and normal in the previous frame's view space, once, so that the four
-      // neighbours are compared where they are stored (distances and angles are the same).
-      const Vec3d pp = M * Vec3d(cur.position[i]) + m;
-      const Vec3d np = M * Vec3d(cur.normal[i]);
-      std::fill(acc.begin(), acc.end(), 0.0);
-      double wsum = 0;
-      for (int k = 0; k < 4; ++k) {
-        const int xx = x0 + (k & 1), yy = y0 + (k >> 1);
-        const double w = ((k & 1) ? ax : 1 - ax) * ((k >> 1) ? ay : 1 - ay);
-        if (!(w > 0) || xx < 0 || xx >= prev.width || yy < 0 || yy >= prev.height) continue;
-        const size_t s = size_t(yy) * prev.width + xx;
-        if (prev.is_background(s)) continue;
-        const Vec3d d = Vec3d(prev.position[s]) - pp;
-        if (!(dot(d, d) <= max_dist * max_dist)) continue;
-        if (!(dot(Vec3d(prev.normal[s]), np) >= double(tol.normal_cos))) continue;
-        wsum += w;
-        for (int c = 0; c < channels; ++c) acc[c] += w * prev_value[s * channels + size_t(c)];
-      }
-      if (!(wsum > 0)) continue;
-      r.valid[i] = 1;
-      const double inv = 1 / wsum;
-      for (int c = 0; c < channels; ++c) r.value[i * channels + c] = float(acc[c] * inv);
-    }
+    if (channels == 9)
+      gather_row<9>(prev, prev_value, channels, cur, motion, M, m, tol, y, r);
+    else if (channels == 21)
+      gather_row<21>(prev, prev_value, channels, cur, motion, M, m, tol, y, r);
+    else
+      gather_row<0>(prev, prev_value, channels, cur, motion, M, m, tol, y, r);
   });
   return r;
 }
