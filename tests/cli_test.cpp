@@ -1145,5 +1145,145 @@ TEST_F(Cli, ManPageDocumentsEveryOption) {
   }
 }
 
+// The sample's frame 1 sidecar for an image of its own that shows the sample's w x h pixels
+// from (x0, y0): the same focal length in pixels (lens scaled by 256 / w) and the principal
+// point moved with the crop (Blender's shifts, in units of the image width).
+void write_crop_sidecar(const std::string& path, int frame, int x0, int y0, int w, int h) {
+  json j = json::parse(test::read_text(sample(frame, ".camera.json")));
+  const Camera c = io::camera_from_sidecar(sample(frame, ".camera.json"));
+  j["resolution"] = {w, h};
+  j["lens_mm"] = j["lens_mm"].get<double>() * kSampleW / w;
+  j["shift_x"] = (0.5 * w - (c.cx - x0)) / w;
+  j["shift_y"] = ((c.cy - y0) - 0.5 * h) / w;
+  test::write_text(path, j.dump(2));
+}
+
+// Largest difference over every channel of two EXRs of the same size.
+double max_difference(const test::Pixels& a, const test::Pixels& b) {
+  EXPECT_EQ(a.spec.channelnames, b.spec.channelnames);
+  EXPECT_EQ(a.data.size(), b.data.size());
+  double worst = 0;
+  for (size_t i = 0; i < std::min(a.data.size(), b.data.size()); ++i)
+    worst = std::max(worst, double(std::fabs(a.data[i] - b.data[i])));
+  return worst;
+}
+
+// A crop written as compositors write it (data window 200x100 at (20, 10) of the 256x144
+// display window) with the full frame's sidecar beside it: the outputs keep both windows,
+// the camera is the sidecar's moved by the crop, so that they equal those of the same pixels
+// given as an image of their own with a camera made for them; the display image frames the
+// display window, transparent where the crop has no pixels.
+TEST_F(Cli, ACropKeepsItsWindowsAndTheSidecarsCamera) {
+  constexpr int kX = 20, kY = 10, kW = 200, kH = 100;
+  fs::create_directories(path("alone"));
+  for (int n = 1; n <= 2; ++n) {
+    test::window_exr(sample(n), in_frame(n), kX, kY, kW, kH, true);
+    fs::copy_file(sample(n, ".camera.json"), in_frame(n, ".camera.json"));
+    const std::string alone = path("alone") + sample(n, "").substr(test::kRoomPoles.size());
+    test::window_exr(sample(n), alone + ".exr", kX, kY, kW, kH, false);
+    write_crop_sidecar(alone + ".camera.json", n, kX, kY, kW, kH);
+  }
+  RunResult r = hbil(run_args(path("in/frame_####.exr"), path("out/crop_####.exr")));
+  ASSERT_EQ(r.code, 0) << r.err;
+  r = hbil(run_args(path("alone/frame_####.exr"), path("out/alone_####.exr")));
+  ASSERT_EQ(r.code, 0) << r.err;
+  for (int n = 1; n <= 2; ++n) {
+    const std::string f = "out/crop_000" + std::to_string(n);
+    const test::Pixels crop = test::read_pixels(path(f + ".exr"));
+    const test::Pixels alone =
+        test::read_pixels(path("out/alone_000" + std::to_string(n) + ".exr"));
+    EXPECT_EQ(crop.spec.x, kX);
+    EXPECT_EQ(crop.spec.y, kY);
+    EXPECT_EQ(crop.spec.width, kW);
+    EXPECT_EQ(crop.spec.height, kH);
+    EXPECT_EQ(crop.spec.full_x, 0);
+    EXPECT_EQ(crop.spec.full_y, 0);
+    EXPECT_EQ(crop.spec.full_width, kSampleW);
+    EXPECT_EQ(crop.spec.full_height, kSampleH);
+    // The cameras agree to rounding (the alone one's focal length is 25.6 / 36 x 200 px).
+    const double worst = max_difference(crop, alone);
+    RecordProperty("max_difference_frame_" + std::to_string(n), std::to_string(worst));
+    EXPECT_LT(worst, 1e-4) << "frame " << n;
+    const json cam = json::parse(crop.spec.get_string_attribute("hbil:camera"));
+    const Camera full = io::camera_from_sidecar(sample(n, ".camera.json"));
+    EXPECT_NEAR(cam["cx"].get<double>(), full.cx - kX, 1e-9);
+    EXPECT_NEAR(cam["cy"].get<double>(), full.cy - kY, 1e-9);
+    const test::Pixels png = test::read_pixels(path(f + ".png"));
+    ASSERT_EQ(png.spec.width, kSampleW);
+    ASSERT_EQ(png.spec.height, kSampleH);
+    ASSERT_EQ(png.spec.nchannels, 4);
+    EXPECT_EQ(png.at(kX - 1, kY + 5, 3), 0.f) << "left of the crop";
+    EXPECT_EQ(png.at(kX + 5, kY + kH, 3), 0.f) << "below the crop";
+    EXPECT_GT(png.at(kX + kW / 2, kY + kH / 2, 3), 0.f) << "inside the crop";
+  }
+}
+
+// An overscan (a display window inside the data window, here 224x126 at (16, 9) of the
+// sample's 256x144 pixels) with a sidecar for the display window: the guard band is searched
+// like any pixel, so the outputs are those of the same pixels with the full frame's camera,
+// with both windows kept; the display image is the display window's part.
+TEST_F(Cli, AnOverscanSearchesItsGuardBandAndFramesTheDisplayWindow) {
+  constexpr int kX = 16, kY = 9, kW = 224, kH = 126;
+  for (int n = 1; n <= 2; ++n) {
+    test::patch_display_window(sample(n), in_frame(n), kX, kY, kW, kH);
+    // The display window's camera: the full frame's cropped (its centre moves by (kX, kY)).
+    write_crop_sidecar(in_frame(n, ".camera.json"), n, kX, kY, kW, kH);
+  }
+  RunResult r = hbil(run_args(path("in/frame_####.exr"), path("out/over_####.exr")));
+  ASSERT_EQ(r.code, 0) << r.err;
+  r = hbil(
+      run_args(test::kRoomPoles + "/frame_####.exr", path("out/plain_####.exr"), "--frames 1-2"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  for (int n = 1; n <= 2; ++n) {
+    const std::string id = "000" + std::to_string(n);
+    const test::Pixels over = test::read_pixels(path("out/over_" + id + ".exr"));
+    const test::Pixels plain = test::read_pixels(path("out/plain_" + id + ".exr"));
+    EXPECT_EQ(over.spec.x, 0);
+    EXPECT_EQ(over.spec.width, kSampleW);
+    EXPECT_EQ(over.spec.full_x, kX);
+    EXPECT_EQ(over.spec.full_y, kY);
+    EXPECT_EQ(over.spec.full_width, kW);
+    EXPECT_EQ(over.spec.full_height, kH);
+    const double worst = max_difference(over, plain);
+    RecordProperty("max_difference_frame_" + std::to_string(n), std::to_string(worst));
+    EXPECT_LT(worst, 1e-4) << "frame " << n;
+    const test::Pixels png = test::read_pixels(path("out/over_" + id + ".png"));
+    const test::Pixels plain_png = test::read_pixels(path("out/plain_" + id + ".png"));
+    ASSERT_EQ(png.spec.width, kW);
+    ASSERT_EQ(png.spec.height, kH);
+    double png_worst = 0;
+    for (int y = 0; y < kH; ++y)
+      for (int x = 0; x < kW; ++x)
+        for (int c = 0; c < 4; ++c)
+          png_worst = std::max(
+              png_worst, double(std::fabs(png.at(x, y, c) - plain_png.at(x + kX, y + kY, c))));
+    EXPECT_LE(png_worst, 1.5 / 255) << "frame " << n;
+  }
+}
+
+// A data window that moves inside a sequence (same size, another origin): exit 5 from the
+// headers, before any frame is computed, as for a resolution change.
+TEST_F(Cli, ADataWindowThatMovesInASequenceIsBadData) {
+  test::window_exr(sample(1), in_frame(1), 20, 10, 200, 100, true);
+  test::window_exr(sample(2), in_frame(2), 24, 10, 200, 100, true);
+  for (int n = 1; n <= 2; ++n)
+    fs::copy_file(sample(n, ".camera.json"), in_frame(n, ".camera.json"));
+  expect_failure(run_args(path("in/frame_####.exr"), path("out/out_####.exr")), Exit::bad_data,
+                 {"frame 2", "data window at (24, 10) differs from (20, 10)"});
+  const RunResult r = hbil("info " + q(in_frame(2)));
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(contains(r.out, "windows: data 200x100 at (24, 10), display 256x144 at (0, 0)"))
+      << r.out;
+}
+
+// A sidecar that is neither for the display window nor the image: exit 6, both sizes named.
+TEST_F(Cli, ASidecarForAnotherDisplayWindowIsRefused) {
+  test::window_exr(sample(1), in_frame(1), 20, 10, 200, 100, true);
+  test::write_sidecar(in_frame(1, ".camera.json"), 200, 100);
+  expect_failure(run_args(path("in/frame_####.exr"), path("out/out_####.exr")), Exit::camera,
+                 {"frame 1", "camera sidecar frame_0001.camera.json is for 200x100",
+                  "display window is 256x144", "data window 200x100 at (20, 10)"});
+}
+
 }  // namespace
 }  // namespace hbil

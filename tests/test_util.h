@@ -238,6 +238,44 @@ inline void crop_exr(const std::string& src, const std::string& dst, int w, int 
   write_pixels(dst, out);
 }
 
+// The w x h pixels of `src` from (x0, y0), all channels, written as a float EXR whose data
+// window is at (x0, y0) and whose display window is src's (`keep_window`: a crop as a
+// compositor writes it), or as an image of its own with both windows at (0, 0).
+inline void window_exr(const std::string& src, const std::string& dst, int x0, int y0, int w, int h,
+                       bool keep_window) {
+  const Pixels in = read_pixels(src);
+  Pixels out;
+  out.spec = in.spec;
+  out.spec.width = w;
+  out.spec.height = h;
+  out.spec.x = keep_window ? x0 : 0;
+  out.spec.y = keep_window ? y0 : 0;
+  if (!keep_window) {
+    out.spec.full_x = out.spec.full_y = 0;
+    out.spec.full_width = w;
+    out.spec.full_height = h;
+  }
+  out.data.resize(size_t(w) * h * in.spec.nchannels);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      for (int c = 0; c < in.spec.nchannels; ++c) out.at(x, y, c) = in.at(x0 + x, y0 + y, c);
+  write_pixels(dst, out);
+}
+
+// A copy of the OpenEXR file `src` whose header's displayWindow is w x h pixels from (x, y);
+// the pixels and the data window stay as they are.
+inline void patch_display_window(const std::string& src, const std::string& dst, int x, int y,
+                                 int w, int h) {
+  std::string bytes = read_text(src);
+  const std::string key("displayWindow\0box2i\0", 20);
+  const size_t at = bytes.find(key);
+  ASSERT_NE(at, std::string::npos) << src << " has no displayWindow attribute";
+  const int32_t box[4] = {x, y, x + w - 1, y + h - 1};  // xMin, yMin, xMax, yMax
+  ASSERT_EQ(bytes.compare(at + key.size(), 4, std::string("\x10\0\0\0", 4)), 0);
+  std::memcpy(&bytes[at + key.size() + 4], box, sizeof box);
+  write_text(dst, bytes);
+}
+
 // A copy of the OpenEXR file `src` whose header's dataWindow says w x h pixels (from
 // (0, 0)); nothing else changes, so the pixels stored no longer match it.
 inline void patch_data_window(const std::string& src, const std::string& dst, int w, int h) {

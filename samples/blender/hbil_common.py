@@ -18,6 +18,10 @@ Command line common to all scene scripts (after ``--``)::
                        use the default). The camera sidecar records the size rendered.
     --bounces N        override the mode's bounce count (max_bounces = diffuse_bounces = N);
                        0 = direct light only. Default: the mode's own (main 8, bounce1 1).
+    --overscan P       render P % more on each side (the focal length in pixels and the
+                       framing kept), and write each EXR with the original frame as its display
+                       window and the guard band beyond it in the data window (origin
+                       (-gx, -gy)); the sidecar describes the display window (hbil reads it so)
     --seed S           Cycles seed (fixed for all frames)
     --frames 1-8       frames to render
     --save-blend PATH  also save the built scene
@@ -84,6 +88,7 @@ def parse_args():
     p.add_argument("--frames", default="%d-%d" % FRAMES)
     p.add_argument("--size", type=parse_size, default=RES, metavar="WxH")
     p.add_argument("--bounces", type=non_negative, default=None, metavar="N")
+    p.add_argument("--overscan", type=float, default=0.0, metavar="PERCENT")
     p.add_argument("--save-blend")
     p.add_argument("--no-render", action="store_true")
     return p.parse_args(argv)
@@ -377,7 +382,38 @@ def configure(scene, mode, samples, seed, ao_distance=1.0, size=RES, bounces=Non
 # --------------------------------------------------------------------------- #
 # render loop
 # --------------------------------------------------------------------------- #
-def render_frames(scene, out_dir, frames):
+class Overscan:
+    """A guard band of `percent` % of the frame's size on each side: the render grows by
+    2 gx x 2 gy pixels and the sensor with it, so that the focal length in pixels and the
+    principal point (the centre) stay where the original framing has them."""
+
+    def __init__(self, scene, percent):
+        r = scene.render
+        self.w, self.h = r.resolution_x, r.resolution_y
+        self.gx = int(round(self.w * percent / 100.0))
+        self.gy = int(round(self.h * percent / 100.0))
+        self.cam = scene.camera.data
+        self.sensor = (self.cam.sensor_width, self.cam.sensor_height)
+        if self.cam.sensor_fit != 'AUTO' or self.w < self.h:
+            raise SystemExit("--overscan needs a landscape frame with sensor_fit AUTO")
+        if abs(self.cam.shift_x) + abs(self.cam.shift_y) > 0:
+            raise SystemExit("--overscan needs a camera without shift")
+
+    def grow(self, scene):
+        scale = (self.w + 2 * self.gx) / self.w
+        scene.render.resolution_x = self.w + 2 * self.gx
+        scene.render.resolution_y = self.h + 2 * self.gy
+        self.cam.sensor_width = self.sensor[0] * scale
+        self.cam.sensor_height = self.sensor[1] * scale
+        bpy.context.view_layer.update()
+
+    def original(self, scene):
+        scene.render.resolution_x, scene.render.resolution_y = self.w, self.h
+        self.cam.sensor_width, self.cam.sensor_height = self.sensor
+        bpy.context.view_layer.update()
+
+
+def render_frames(scene, out_dir, frames, overscan=None):
     out_dir = os.path.abspath(out_dir)
     os.makedirs(out_dir, exist_ok=True)
     pattern = os.path.join(out_dir, "frame_####")
@@ -394,7 +430,14 @@ def render_frames(scene, out_dir, frames):
         cpu = time.process_time() - c0  # CPU seconds of all render threads
         times.append(dt)
         scene.render.filepath = pattern
+        if overscan:
+            # The sidecar describes the display window: the original framing.
+            overscan.original(scene)
         side = export_camera.write_sidecar(scene, exr, f, bpy.context.evaluated_depsgraph_get())
+        if overscan:
+            overscan.grow(scene)
+            import repack_exr  # numpy and OpenImageIO, which Blender's Python has
+            repack_exr.set_windows(exr, -overscan.gx, -overscan.gy, overscan.w, overscan.h)
         print("HBIL_FRAME scene=%s frame=%d seconds=%.2f cpu_seconds=%.2f samples=%d "
               "file=%s sidecar=%s"
               % (scene.name, f, dt, cpu, scene.cycles.samples, exr, os.path.basename(side)),
@@ -421,4 +464,8 @@ def run(name, build, film_transparent=False):
         return
     if not a.out:
         raise SystemExit("--out DIR is required to render")
-    render_frames(scene, a.out, export_camera.parse_frames(a.frames))
+    overscan = None
+    if a.overscan > 0:
+        overscan = Overscan(scene, a.overscan)
+        overscan.grow(scene)
+    render_frames(scene, a.out, export_camera.parse_frames(a.frames), overscan)

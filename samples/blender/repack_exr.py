@@ -98,6 +98,44 @@ def repack(path, drop=()):
     return True
 
 
+def set_windows(path, x, y, full_width, full_height):
+    """Rewrite ``path`` in place with its data window at (x, y) and a display window of
+    full_width x full_height at (0, 0): an overscan render (samples/blender --overscan), whose
+    guard band lies outside the display window. Pixels, channel names and types, compression
+    and attributes stay as they are."""
+    inp = oiio.ImageInput.open(path)
+    if inp is None:
+        raise RuntimeError("cannot open %s: %s" % (path, oiio.geterror()))
+    spec = inp.spec()
+    pixels = inp.read_image(0, 0, 0, spec.nchannels, oiio.FLOAT)
+    inp.close()
+    if pixels is None:
+        raise RuntimeError("cannot read %s: %s" % (path, oiio.geterror()))
+    out_spec = oiio.ImageSpec(spec)
+    out_spec.x, out_spec.y = x, y
+    out_spec.full_x = out_spec.full_y = 0
+    out_spec.full_width, out_spec.full_height = full_width, full_height
+    for a in ("oiio:BitsPerSample", "oiio:subimages", "oiio:subimagename"):
+        out_spec.erase_attribute(a)
+    tmp = path + ".window.tmp.exr"
+    out = oiio.ImageOutput.create(tmp)
+    if out is None or not out.open(tmp, out_spec):
+        raise RuntimeError("cannot write %s: %s" % (tmp, oiio.geterror()))
+    ok = out.write_image(np.ascontiguousarray(pixels, dtype=np.float32))
+    out.close()
+    if not ok:
+        raise RuntimeError("write failed %s: %s" % (tmp, out.geterror()))
+    check = oiio.ImageInput.open(tmp)
+    s2 = check.spec()
+    again = check.read_image(0, 0, 0, s2.nchannels, oiio.FLOAT)
+    check.close()
+    if (s2.x, s2.y, s2.full_width, s2.full_height) != (x, y, full_width, full_height) \
+            or channel_formats(s2) != channel_formats(spec) \
+            or not np.array_equal(again, pixels, equal_nan=True):
+        raise RuntimeError("%s: the windowed copy does not match" % path)
+    os.replace(tmp, path)
+
+
 def verify(src_path, new_path, src_pixels, src_names):
     """Re-read the new file: same names, expected types, values within half precision."""
     src = oiio.ImageInput.open(src_path)

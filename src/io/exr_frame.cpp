@@ -431,6 +431,26 @@ Camera find_camera(const InputFrame& f, GBuffer& g, const Params& p, double max_
   const std::string sidecar = sidecar_path_for(f.path);
   if (fs::exists(sidecar)) {
     cam = camera_from_sidecar(sidecar);
+    // A sidecar describes the frame as framed: the display window. The pixels are the data
+    // window's (a crop, or an overscan's guard band), whose raster starts full - data
+    // origin further on.
+    const bool windowed = f.spec.full_width != f.spec.width ||
+                          f.spec.full_height != f.spec.height || f.spec.full_x != f.spec.x ||
+                          f.spec.full_y != f.spec.y;
+    if (windowed) {
+      if (cam.width != f.spec.full_width || cam.height != f.spec.full_height) {
+        std::ostringstream s;
+        s << f.where() << ": camera " << cam.source << " is for " << cam.width << "x" << cam.height
+          << " but the image's display window is " << f.spec.full_width << "x" << f.spec.full_height
+          << " (its data window " << f.spec.width << "x" << f.spec.height << " at (" << f.spec.x
+          << ", " << f.spec.y << "))";
+        throw Error(Exit::camera, s.str());
+      }
+      cam.cx += double(f.spec.full_x - f.spec.x);
+      cam.cy += double(f.spec.full_y - f.spec.y);
+      cam.width = f.spec.width;
+      cam.height = f.spec.height;
+    }
   } else if (auto attr = camera_from_exr_attributes(f.spec)) {
     cam = *attr;
   } else if (f.has("position")) {

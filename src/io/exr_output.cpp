@@ -116,6 +116,16 @@ std::string write_temporary(const std::string& final_path, const AoFrame& f,
   if (!any_half) spec.channelformats.clear();
   spec.alpha_channel = -1;
   spec.z_channel = -1;
+  // The input's data and display windows (a crop, or an overscan's guard band), which the
+  // frame's pixels cover as its input's do.
+  if (input_header.width == f.width && input_header.height == f.height) {
+    spec.x = input_header.x;
+    spec.y = input_header.y;
+    spec.full_x = input_header.full_x;
+    spec.full_y = input_header.full_y;
+    spec.full_width = input_header.full_width;
+    spec.full_height = input_header.full_height;
+  }
   // The input's metadata first (stamp, cycles.*, ...), minus what describes its storage and
   // its writer: BlenderMultiChannel tells Blender the channels are its own render layers,
   // which hbil's are not; Software is hbil.
@@ -165,7 +175,7 @@ std::string write_temporary(const std::string& final_path, const AoFrame& f,
           << "); nothing was written (a defect in hbil: please report it with this frame)";
         throw Error(Exit::failure, m.str());
       }
-    ok = out->write_scanlines(y0, y1, 0, OIIO::TypeUnknown, strip.data());
+    ok = out->write_scanlines(spec.y + y0, spec.y + y1, 0, OIIO::TypeUnknown, strip.data());
   }
   if (!ok || !out->close()) {
     throw Error(Exit::output, final_path + ": cannot write: " + out->geterror());

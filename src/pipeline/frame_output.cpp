@@ -49,6 +49,37 @@ const std::vector<float>& display_pixels(const AoFrame& f, const std::string& la
   return scratch;
 }
 
+// The display image frames the display window: the data window's pixels where the two
+// overlap, zero (black; transparent where there is alpha) where the data window has none,
+// and the guard band beyond the display window left out. `px` itself where the windows are
+// one (or `spec` is not the frame's), else `scratch` filled.
+const std::vector<float>& display_window(const std::vector<float>& px, int channels, int& width,
+                                         int& height, const OIIO::ImageSpec& spec,
+                                         std::vector<float>& scratch) {
+  if (spec.width != width || spec.height != height ||
+      (spec.x == spec.full_x && spec.y == spec.full_y && spec.width == spec.full_width &&
+       spec.height == spec.full_height) ||
+      spec.full_width <= 0 || spec.full_height <= 0)
+    return px;
+  const int w = spec.full_width, h = spec.full_height;
+  std::vector<float> out(size_t(w) * size_t(h) * size_t(channels), 0.f);
+  for (int y = 0; y < h; ++y) {
+    const int sy = y + spec.full_y - spec.y;  // the data window's row
+    if (sy < 0 || sy >= height) continue;
+    for (int x = 0; x < w; ++x) {
+      const int sx = x + spec.full_x - spec.x;
+      if (sx < 0 || sx >= width) continue;
+      const float* from = &px[(size_t(sy) * size_t(width) + size_t(sx)) * size_t(channels)];
+      std::copy(from, from + channels,
+                &out[(size_t(y) * size_t(w) + size_t(x)) * size_t(channels)]);
+    }
+  }
+  scratch = std::move(out);
+  width = w;
+  height = h;
+  return scratch;
+}
+
 // 64-bit FNV-1a over fields, each preceded by its length so that no two lists of fields
 // hash the same bytes.
 class Digest {
@@ -228,10 +259,14 @@ void FrameOutput::write(const FrameResult& r, const std::function<void()>& commi
   if (display_)
     shown = std::async(std::launch::async, [&] {
       int channels = 0;
-      std::vector<float> scratch;
-      const std::vector<float>& px = display_pixels(r.outputs, display_layer_, channels, scratch);
+      std::vector<float> scratch, framed;
+      int width = r.outputs.width, height = r.outputs.height;
+      const std::vector<float>& layer =
+          display_pixels(r.outputs, display_layer_, channels, scratch);
+      const std::vector<float>& px =
+          display_window(layer, channels, width, height, r.input->spec, framed);
       return io::write_display_temporary(
-          shown_path, px, channels, r.outputs.width, r.outputs.height, *display_,
+          shown_path, px, channels, width, height, *display_,
           "hbil " + display_layer_ + ", frame " + std::to_string(r.frame));
     });
   std::exception_ptr failed;

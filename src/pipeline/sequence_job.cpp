@@ -23,14 +23,21 @@ double ms(Clock::time_point a, Clock::time_point b) {
   return std::chrono::duration<double, std::milli>(b - a).count();
 }
 
-// A frame whose size is not that of the run's first frame (first_path): exit 5.
-void require_same_size(const io::InputFrame& in, int width, int height,
+// A frame whose data window (size or origin) is not that of the run's first frame
+// (first_path): exit 5.
+void require_same_size(const io::InputFrame& in, const OIIO::ImageSpec& first,
                        const std::string& first_path) {
-  if (in.spec.width != width || in.spec.height != height)
+  if (in.spec.width != first.width || in.spec.height != first.height)
     throw Error(Exit::bad_data, in.where() + ": resolution " + std::to_string(in.spec.width) + "x" +
                                     std::to_string(in.spec.height) + " differs from " +
-                                    std::to_string(width) + "x" + std::to_string(height) + " of " +
-                                    first_path);
+                                    std::to_string(first.width) + "x" +
+                                    std::to_string(first.height) + " of " + first_path);
+  // The history is carried over in the data window's raster.
+  if (in.spec.x != first.x || in.spec.y != first.y)
+    throw Error(Exit::bad_data, in.where() + ": data window at (" + std::to_string(in.spec.x) +
+                                    ", " + std::to_string(in.spec.y) + ") differs from (" +
+                                    std::to_string(first.x) + ", " + std::to_string(first.y) +
+                                    ") of " + first_path);
 }
 
 }  // namespace
@@ -106,7 +113,7 @@ SequenceJob::SequenceJob(SequencePlan plan, const Params& requested) : plan_(std
   const io::InputFrame& head = plan_.preroll.empty() ? first_ : others.front();
   auto check = [&](const io::InputFrame& in) {
     io::fields_needed(in, p_);  // exit 4, naming the channels looked for
-    require_same_size(in, head.spec.width, head.spec.height, head.path);
+    require_same_size(in, head.spec, head.path);
   };
   check(first_);
   for (const io::InputFrame& in : others) check(in);
@@ -203,7 +210,7 @@ void SequenceJob::run(const Hooks& hooks, Overlap overlap_mode, const SH9* given
   std::future<Loaded> next = std::async(std::launch::async, load, order.front());
   std::future<Delivery> delivering;  // the previous frame's
   std::string first_path;
-  int width = 0, height = 0;
+  OIIO::ImageSpec first_spec;
   try {
     for (size_t k = 0; k < order.size(); ++k) {
       const auto t0 = Clock::now();
@@ -217,11 +224,10 @@ void SequenceJob::run(const Hooks& hooks, Overlap overlap_mode, const SH9* given
       if (overlap) read_next();
       const io::InputFrame& in = cur.in;
       if (k == 0) {
-        width = in.spec.width;
-        height = in.spec.height;
+        first_spec = in.spec;
         first_path = in.path;
       } else {
-        require_same_size(in, width, height, first_path);  // the file changed since the start
+        require_same_size(in, first_spec, first_path);  // the file changed since the start
       }
       if (cur.zero.count > 0 && hooks.warning) {
         const size_t i = cur.zero.first;
