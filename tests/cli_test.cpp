@@ -1261,6 +1261,28 @@ TEST_F(Cli, AnOverscanSearchesItsGuardBandAndFramesTheDisplayWindow) {
   }
 }
 
+// compare takes each image's pixels where its data window puts them: a crop is compared
+// with the part of the full frame it shows (an overscan's output with a render of the frame
+// alone), and a reference that does not lie within the test is exit 5, naming both windows.
+TEST_F(Cli, CompareMatchesPixelsByTheirDataWindows) {
+  test::window_exr(sample(1), in_frame(1), 20, 10, 200, 100, true);
+  RunResult r = hbil("compare " + q(sample(1)) + " " + q(in_frame(1)) +
+                     " --layer DiffCol --mask none --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const json j = json::parse(r.out);
+  EXPECT_EQ(j["overall"]["pixels"].get<size_t>(), size_t(3) * 200 * 100);
+  EXPECT_EQ(j["overall"]["rmse"].get<double>(), 0.0);
+  // Shifted by one pixel, the same crop no longer matches the frame.
+  test::window_exr(sample(1), in_frame(2), 21, 10, 200, 100, false);
+  r = hbil("compare " + q(in_frame(2)) + " " + q(in_frame(1)) + " --layer DiffCol --json");
+  ASSERT_EQ(r.code, 0) << r.err;  // same size: pixel for pixel
+  EXPECT_GT(json::parse(r.out)["overall"]["rmse"].get<double>(), 0.0);
+  r = hbil("compare " + q(in_frame(1)) + " " + q(sample(1)) + " --layer DiffCol");
+  EXPECT_EQ(r.code, int(Exit::bad_data)) << r.err;
+  EXPECT_TRUE(contains(r.err, "is 200x100 at (20, 10) but")) << r.err;
+  EXPECT_TRUE(contains(r.err, "is 256x144, which does not lie within it")) << r.err;
+}
+
 // A data window that moves inside a sequence (same size, another origin): exit 5 from the
 // headers, before any frame is computed, as for a resolution change.
 TEST_F(Cli, ADataWindowThatMovesInASequenceIsBadData) {

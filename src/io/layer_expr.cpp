@@ -27,8 +27,13 @@ std::vector<float> ImageFile::read(int c) {
 }
 
 MemoryChannels::MemoryChannels(std::string name, int width, int height,
-                               std::vector<Channel> channels)
-    : name_(std::move(name)), width_(width), height_(height), channels_(std::move(channels)) {
+                               std::vector<Channel> channels, int x, int y)
+    : name_(std::move(name)),
+      width_(width),
+      height_(height),
+      x_(x),
+      y_(y),
+      channels_(std::move(channels)) {
   for (const Channel& c : channels_) names_.push_back(c.name);
 }
 
@@ -41,6 +46,38 @@ std::vector<float> MemoryChannels::read(int c) {
 }
 
 namespace {
+
+// The part of `src` that lies where `at` has its pixels (at's window within src's).
+class WindowOf : public ChannelSource {
+ public:
+  WindowOf(ChannelSource& src, const ChannelSource& at) : src_(src), at_(at) {}
+  const std::string& name() const override { return src_.name(); }
+  int width() const override { return at_.width(); }
+  int height() const override { return at_.height(); }
+  int x() const override { return at_.x(); }
+  int y() const override { return at_.y(); }
+  const std::vector<std::string>& channel_names() const override { return src_.channel_names(); }
+  std::vector<float> read(int c) override {
+    const std::vector<float> all = src_.read(c);
+    std::vector<float> v(size_t(width()) * size_t(height()));
+    const int dx = x() - src_.x(), dy = y() - src_.y();
+    for (int j = 0; j < height(); ++j)
+      std::copy_n(all.begin() + ptrdiff_t((size_t(j + dy) * size_t(src_.width()) + size_t(dx))),
+                  width(), v.begin() + ptrdiff_t(size_t(j) * size_t(width())));
+    return v;
+  }
+
+ private:
+  ChannelSource& src_;
+  const ChannelSource& at_;
+};
+
+std::string describe_window(const ChannelSource& s) {
+  std::string d = std::to_string(s.width()) + "x" + std::to_string(s.height());
+  if (s.x() != 0 || s.y() != 0)
+    d += " at (" + std::to_string(s.x()) + ", " + std::to_string(s.y()) + ")";
+  return d;
+}
 
 int rank(const std::string& comp) {
   static const std::vector<std::string> order = {"R", "G", "B", "A", "X", "Y",
@@ -329,19 +366,28 @@ LayerComparison compare_layers(ChannelSource& test, const LayerExpr& test_expr,
                                const std::string& ref_option, const std::string& ref_text,
                                const MaskSpec& mask, bool colour_only,
                                const std::vector<unsigned char>* region, bool keep_planes) {
-  if (test.width() != ref.width() || test.height() != ref.height())
-    throw Error(Exit::bad_data, test.name() + " is " + std::to_string(test.width()) + "x" +
-                                    std::to_string(test.height()) + " but " + ref.name() + " is " +
-                                    std::to_string(ref.width()) + "x" +
-                                    std::to_string(ref.height()));
-  BoundExpr tb(test_expr, test, test_option, test_text), rb(ref_expr, ref, ref_option, ref_text);
+  const bool same = test.width() == ref.width() && test.height() == ref.height() &&
+                    test.x() == ref.x() && test.y() == ref.y();
+  const bool inside = ref.x() >= test.x() && ref.y() >= test.y() &&
+                      int64_t(ref.x()) + ref.width() <= int64_t(test.x()) + test.width() &&
+                      int64_t(ref.y()) + ref.height() <= int64_t(test.y()) + test.height();
+  // Same-sized images whose origins differ are compared pixel for pixel, as before windows
+  // were read (a render and a crop written from (0, 0)).
+  const bool sized = test.width() == ref.width() && test.height() == ref.height();
+  if (!same && !sized && !inside)
+    throw Error(Exit::bad_data, test.name() + " is " + describe_window(test) + " but " +
+                                    ref.name() + " is " + describe_window(ref) +
+                                    ", which does not lie within it");
+  WindowOf window(test, ref);
+  ChannelSource& t = same || sized ? test : window;
+  BoundExpr tb(test_expr, t, test_option, test_text), rb(ref_expr, ref, ref_option, ref_text);
   const size_t n = std::max(tb.channels(), rb.channels());
   if ((tb.channels() != n && tb.channels() != 1) || (rb.channels() != n && rb.channels() != 1))
     throw Error(Exit::usage, "layer '" + to_string(test_expr) + "' has " +
                                  std::to_string(tb.channels()) + " channels but '" +
                                  to_string(ref_expr) + "' has " + std::to_string(rb.channels()));
   LayerComparison out;
-  auto valid = make_mask(test, ref, mask, out.mask);
+  auto valid = make_mask(t, ref, mask, out.mask);
   if (region)
     for (size_t i = 0; i < valid.size() && i < region->size(); ++i)
       valid[i] = valid[i] && (*region)[i];

@@ -37,6 +37,9 @@ class ChannelSource {
   virtual const std::string& name() const = 0;
   virtual int width() const = 0;
   virtual int height() const = 0;
+  // The origin of the pixels (an EXR's data window), in the display window's raster.
+  virtual int x() const { return 0; }
+  virtual int y() const { return 0; }
   virtual const std::vector<std::string>& channel_names() const = 0;
   // Channel c, width() * height() values in row order. Throws Error(Exit::input).
   virtual std::vector<float> read(int c) = 0;
@@ -50,6 +53,8 @@ class ImageFile : public ChannelSource {
   const std::string& name() const override { return path_; }
   int width() const override { return spec_.width; }
   int height() const override { return spec_.height; }
+  int x() const override { return spec_.x; }
+  int y() const override { return spec_.y; }
   const std::vector<std::string>& channel_names() const override { return spec_.channelnames; }
   std::vector<float> read(int c) override;
   const OIIO::ImageSpec& spec() const { return spec_; }
@@ -68,16 +73,19 @@ class MemoryChannels : public ChannelSource {
     const float* src = nullptr;
     size_t stride = 1;
   };
-  MemoryChannels(std::string name, int width, int height, std::vector<Channel> channels);
+  MemoryChannels(std::string name, int width, int height, std::vector<Channel> channels, int x = 0,
+                 int y = 0);
   const std::string& name() const override { return name_; }
   int width() const override { return width_; }
   int height() const override { return height_; }
+  int x() const override { return x_; }
+  int y() const override { return y_; }
   const std::vector<std::string>& channel_names() const override { return names_; }
   std::vector<float> read(int c) override;
 
  private:
   std::string name_;
-  int width_, height_;
+  int width_, height_, x_, y_;
   std::vector<Channel> channels_;
   std::vector<std::string> names_;
 };
@@ -156,9 +164,11 @@ struct LayerComparison {
 // each: ao.Y against AO.R, AO.G, AO.B). `colour_only`: channel pairs where either channel is
 // an alpha (its name ends in ".A" or is "A") are left out, so that a composite is judged on
 // R, G, B. `region`, when given, keeps only the valid pixels where it is non-zero.
-// `keep_planes`: the result keeps the compared channels and the valid pixels. Throws
-// Error(Exit::bad_data) for images of different sizes, Error(Exit::usage) for channel
-// counts that do not match.
+// `keep_planes`: the result keeps the compared channels and the valid pixels. Images whose
+// pixels lie at different places (data windows) are compared over the reference's, which
+// must lie within the test's (an overscan's output against a render of the frame alone).
+// Throws Error(Exit::bad_data) for images that do not overlap so, Error(Exit::usage) for
+// channel counts that do not match.
 LayerComparison compare_layers(ChannelSource& test, const LayerExpr& test_expr,
                                const std::string& test_option, const std::string& test_text,
                                ChannelSource& ref, const LayerExpr& ref_expr,

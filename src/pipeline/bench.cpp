@@ -243,8 +243,12 @@ io::LayerComparison compare_with_reference(const FrameResult& fr, const Params& 
   std::vector<io::MemoryChannels::Channel> chans;
   for (const io::OutputChannel& oc : io::output_plan(fr.outputs, p))
     chans.push_back({oc.name, oc.src, oc.stride});
+  // At the input's data window, so that an overscan's output is judged over the reference's.
+  const bool windowed = fr.input && fr.input->spec.width == fr.outputs.width &&
+                        fr.input->spec.height == fr.outputs.height;
   io::MemoryChannels test("hbil's frame " + std::to_string(fr.frame), fr.outputs.width,
-                          fr.outputs.height, std::move(chans));
+                          fr.outputs.height, std::move(chans), windowed ? fr.input->spec.x : 0,
+                          windowed ? fr.input->spec.y : 0);
   io::ImageFile file(io::FramePattern(ref.pattern).path(fr.frame));
   return io::compare_layers(test, io::parse_layer_expr("layer", ref.layer), "layer", ref.layer,
                             file, io::parse_layer_expr("--ref " + ref.name, ref.expr),
