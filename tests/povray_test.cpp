@@ -476,6 +476,57 @@ TEST(PovrayImport, PassesRecomposePovRaysOwnRender) {
   EXPECT_LT(worst, 1e-3);
 }
 
+// A guard band in the camera file (render_gbuffer.sh --overscan): the imported frame's data
+// window starts at -guard around a display window of the frame as framed, and hbil run
+// computes on it what it computes on the same passes imported without one; the camera in the
+// EXR attributes is for the display window, the NDC's span. A guard that leaves no frame is
+// refused, naming the key.
+TEST(PovrayImport, AGuardBandBecomesTheDataWindow) {
+  TempDir dir(test::test_name());
+  for (const char* sub : {"plain", "guard"}) {
+    fs::create_directories(dir / sub);
+    for (const char* f : {"depth1.exr", "normal1.exr", "camera1.json"})
+      fs::copy_file(kAnalytic + "/" + f, fs::path(dir / sub) / f);
+  }
+  nlohmann::json j = nlohmann::json::parse(test::read_text(kAnalytic + "/camera1.json"));
+  j["guard"] = {8, 4};
+  test::write_text(dir / "guard/camera1.json", j.dump());
+  for (const char* sub : {"plain", "guard"}) {
+    const std::string s(sub);
+    auto r = test::run_hbil(
+        "import-povray " + q(dir / s) + " -q -o " + q(dir / ("in_" + s + "/frame_####.exr")),
+        dir.path());
+    ASSERT_EQ(r.code, 0) << r.err;
+    r = test::run_hbil("run -q " + q(dir / ("in_" + s + "/frame_####.exr")) + " -o " +
+                           q(dir / ("out_" + s + "/frame_####.exr")),
+                       dir.path());
+    ASSERT_EQ(r.code, 0) << r.err;
+  }
+  const test::Pixels in = test::read_pixels(dir / "in_guard/frame_0001.exr");
+  EXPECT_EQ(in.spec.x, -8);
+  EXPECT_EQ(in.spec.y, -4);
+  EXPECT_EQ(in.spec.width, 128);
+  EXPECT_EQ(in.spec.full_x, 0);
+  EXPECT_EQ(in.spec.full_y, 0);
+  EXPECT_EQ(in.spec.full_width, 112);
+  EXPECT_EQ(in.spec.full_height, 64);
+  const test::Pixels a = test::read_pixels(dir / "out_plain/frame_0001.exr");
+  const test::Pixels b = test::read_pixels(dir / "out_guard/frame_0001.exr");
+  EXPECT_EQ(b.spec.x, -8);
+  EXPECT_EQ(b.spec.full_width, 112);
+  ASSERT_EQ(a.data.size(), b.data.size());
+  double worst = 0;
+  for (size_t i = 0; i < a.data.size(); ++i)
+    worst = std::max(worst, double(std::fabs(a.data[i] - b.data[i])));
+  EXPECT_LT(worst, 1e-5);  // measured: 0 (the same camera, from attributes for two windows)
+  j["guard"] = {64, 0};    // 2 x 64 = the width: no frame left
+  test::write_text(dir / "guard/camera1.json", j.dump());
+  const auto r = test::run_hbil(
+      "import-povray " + q(dir / "guard") + " -o " + q(dir / "bad/frame_####.exr"), dir.path());
+  EXPECT_EQ(r.code, int(Exit::camera)) << r.err;
+  EXPECT_TRUE(test::contains(r.err, "key \"guard\"")) << r.err;
+}
+
 TEST(PovrayImport, BadPassesFailWithTheirExitCodeAndWriteNothing) {
   TempDir dir(test::test_name());
   fs::create_directories(dir / "passes");

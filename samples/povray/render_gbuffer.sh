@@ -7,6 +7,9 @@
 #     --frames A-B     frames to render (default 1-1); the scene sees frame_number, and clock
 #                      runs 0..1 over A..B (POV-Ray's default)
 #     --size WxH       resolution (default 640x360)
+#     --overscan P     render P % more on each side with the field of view widened alike: each
+#                      frame is WxH as framed (its display window) inside a guard band (its
+#                      data window), which hbil searches and gathers from
 #     --reference      also render the radiosity reference (pass 7: Combined and DiffInd)
 #     --bounces N      radiosity bounces of the reference (default 3)
 #     --count N        radiosity rays per sample of the reference (default 1000)
@@ -22,14 +25,15 @@
 # pixel is one ray through its centre and the passes agree pixel for pixel.
 set -euo pipefail
 kit=$(cd "$(dirname "$0")" && pwd)
-frames=1-1 size=640x360 reference=0 bounces=3 count=1000 hbil="" do_import=1 sky=""
+frames=1-1 size=640x360 overscan=0 reference=0 bounces=3 count=1000 hbil="" do_import=1 sky=""
 passes=depth,normal,albedo,emit,direct,backfaces
 args=()
-usage() { sed -n '2,20p' "$0" | sed 's/^# \{0,1\}//'; exit 2; }
+usage() { sed -n '2,23p' "$0" | sed 's/^# \{0,1\}//'; exit 2; }
 while (($#)); do
   case "$1" in
     --frames) frames=$2; shift 2 ;;
     --size) size=$2; shift 2 ;;
+    --overscan) overscan=$2; shift 2 ;;
     --reference) reference=1; shift ;;
     --bounces) bounces=$2; shift 2 ;;
     --count) count=$2; shift 2 ;;
@@ -52,6 +56,13 @@ first=$((10#${BASH_REMATCH[1]})) last=$((10#${BASH_REMATCH[2]}))
   { echo "render_gbuffer.sh: --bounces and --count take positive integers" >&2; exit 2; }
 [[ $size =~ ^([0-9]+)x([0-9]+)$ ]] || { echo "render_gbuffer.sh: --size WxH, got $size" >&2; exit 2; }
 width=${BASH_REMATCH[1]} height=${BASH_REMATCH[2]}
+[[ $overscan =~ ^[0-9]+([.][0-9]+)?$ ]] || { echo "render_gbuffer.sh: --overscan P takes a percentage, got $overscan" >&2; exit 2; }
+# The guard band in pixels per side; the passes are rendered at the grown size.
+guard_x=$(awk -v w="$width" -v p="$overscan" 'BEGIN { printf "%d", w * p / 100 + 0.5 }')
+guard_y=$(awk -v h="$height" -v p="$overscan" 'BEGIN { printf "%d", h * p / 100 + 0.5 }')
+width=$((width + 2 * guard_x)) height=$((height + 2 * guard_y))
+guard=()
+((guard_x > 0 || guard_y > 0)) && guard=(Declare=HBIL_Guard_X="$guard_x" Declare=HBIL_Guard_Y="$guard_y")
 if [[ -n $sky ]]; then
   [[ $sky =~ ^([0-9]+)x([0-9]+)$ && ${BASH_REMATCH[1]} -eq $((2 * ${BASH_REMATCH[2]})) ]] ||
     { echo "render_gbuffer.sh: --sky WxH with W = 2 H, got $sky" >&2; exit 2; }
@@ -80,7 +91,8 @@ anim=(+KFI"$first" +KFF"$last")
 ((first == last)) && anim=(+KFI"$first" +KFF"$((last + 1))" +SF"$first" +EF"$first")
 for p in "${list[@]}"; do
   opts=(+I"$scene" +O"$passdir/$p.exr" +FE +W"$width" +H"$height" -A -D -V
-        Display=off +L"$(dirname "$scene")" +L"$kit" "${anim[@]}" Declare=HBIL_PASS="${number[$p]}")
+        Display=off +L"$(dirname "$scene")" +L"$kit" "${anim[@]}" Declare=HBIL_PASS="${number[$p]}"
+        "${guard[@]}")
   [[ $p == depth ]] && opts+=(+UA)
   [[ $p == reference ]] && opts+=(Declare=HBIL_Radiosity_Bounces="$bounces" Declare=HBIL_Radiosity_Count="$count")
   start=$(date +%s.%N)

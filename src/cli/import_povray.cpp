@@ -34,6 +34,13 @@ void write_frame(const std::string& temporary, const io::ImportedFrame& f,
   OIIO::ImageSpec spec(f.width, f.height, int(f.channels.size()), OIIO::TypeDesc::FLOAT);
   spec.channelnames = f.channels;
   spec.alpha_channel = -1;
+  // A guard band: the frame as framed is the display window, the render the data window
+  // around it (the camera, in the data window's pixels, is written for it below).
+  spec.x = -f.guard_x;
+  spec.y = -f.guard_y;
+  spec.full_x = spec.full_y = 0;
+  spec.full_width = f.width - 2 * f.guard_x;
+  spec.full_height = f.height - 2 * f.guard_y;
   spec.attribute("compression", "zip");
   spec.attribute("hbil:version", HBIL_VERSION);
   spec.attribute("hbil:source", "POV-Ray passes in " + pass_dir + " (hbil import-povray)");

@@ -98,6 +98,18 @@ PovrayCamera read_povray_camera(const std::string& path) {
   c.up = read_vec(j, "up", path);
   if (c.width <= 0 || c.height <= 0)
     camera_file_error(path, "keys \"width\" and \"height\" must be > 0");
+  if (j.contains("guard")) {
+    const json& g = j["guard"];
+    if (!g.is_array() || g.size() != 2 || !g[0].is_number_integer() || !g[1].is_number_integer() ||
+        g[0].get<long long>() < 0 || g[1].get<long long>() < 0 ||
+        2 * g[0].get<long long>() >= c.width || 2 * g[1].get<long long>() >= c.height)
+      camera_file_error(path,
+                        "key \"guard\" must be [x, y], integers >= 0 that leave a frame inside "
+                        "the width and height, found " +
+                            g.dump());
+    c.guard_x = g[0].get<int>();
+    c.guard_y = g[1].get<int>();
+  }
   if (!(c.depth_range > 0)) camera_file_error(path, "key \"depth_range\" must be > 0");
   const double ld = length(c.direction), lr = length(c.right), lu = length(c.up);
   if (!(ld > 0 && lr > 0 && lu > 0))
@@ -220,6 +232,8 @@ ImportedFrame import_povray_frame(const PovrayFrameFiles& files, const std::stri
   ImportedFrame out;
   out.width = w;
   out.height = h;
+  out.guard_x = pc.guard_x;
+  out.guard_y = pc.guard_y;
   out.camera = camera_from_povray(pc, "POV-Ray " + fs::path(files.camera).filename().string());
 
   auto read = [&](const std::string& pass, int min_channels) {

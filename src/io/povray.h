@@ -37,6 +37,9 @@ struct PovrayCamera {
   int frame = 0;
   double clock = 0;
   int width = 0, height = 0;
+  // An overscan's guard band (render_gbuffer.sh --overscan): the frame as framed is the
+  // width - 2 guard_x by height - 2 guard_y pixels in the middle.
+  int guard_x = 0, guard_y = 0;
   double depth_range = 0;
   Vec3d location, direction, right, up;
 };
@@ -71,6 +74,7 @@ std::vector<PovrayFrameFiles> find_povray_frames(const std::string& dir,
 // One imported frame: channels named like a Blender 3.4 multilayer EXR.
 struct ImportedFrame {
   int width = 0, height = 0;
+  int guard_x = 0, guard_y = 0;  // the camera file's: the EXR's data window starts at -guard
   std::vector<std::string> channels;
   std::vector<float> pixels;  // interleaved, rows top-down
   Camera camera;
