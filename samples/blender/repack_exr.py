@@ -86,16 +86,21 @@ def repack(path, drop=()):
         out_spec.erase_attribute(a)
 
     tmp = path + ".repack.tmp.exr"
+    write_float_image(tmp, out_spec, pixels)
+    verify(path, tmp, pixels, names)
+    os.replace(tmp, path)
+    return True
+
+
+def write_float_image(tmp, spec, pixels):
+    """Write ``pixels`` (float32, height x width x channels) to ``tmp`` with ``spec``."""
     out = oiio.ImageOutput.create(tmp)
-    if out is None or not out.open(tmp, out_spec):
+    if out is None or not out.open(tmp, spec):
         raise RuntimeError("cannot write %s: %s" % (tmp, oiio.geterror()))
     ok = out.write_image(np.ascontiguousarray(pixels, dtype=np.float32))
     out.close()
     if not ok:
         raise RuntimeError("write failed %s: %s" % (tmp, out.geterror()))
-    verify(path, tmp, pixels, names)
-    os.replace(tmp, path)
-    return True
 
 
 def set_windows(path, x, y, full_width, full_height):
@@ -118,13 +123,7 @@ def set_windows(path, x, y, full_width, full_height):
     for a in ("oiio:BitsPerSample", "oiio:subimages", "oiio:subimagename"):
         out_spec.erase_attribute(a)
     tmp = path + ".window.tmp.exr"
-    out = oiio.ImageOutput.create(tmp)
-    if out is None or not out.open(tmp, out_spec):
-        raise RuntimeError("cannot write %s: %s" % (tmp, oiio.geterror()))
-    ok = out.write_image(np.ascontiguousarray(pixels, dtype=np.float32))
-    out.close()
-    if not ok:
-        raise RuntimeError("write failed %s: %s" % (tmp, out.geterror()))
+    write_float_image(tmp, out_spec, pixels)
     check = oiio.ImageInput.open(tmp)
     s2 = check.spec()
     again = check.read_image(0, 0, 0, s2.nchannels, oiio.FLOAT)
