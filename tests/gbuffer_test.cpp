@@ -86,5 +86,42 @@ TEST(ZeroNormals, AreBackgroundForTheSearch) {
   });
 }
 
+// A bar 4 pixels tall across the whole frame, at depth 5, in front of a wall at depth 10:
+// the bar's pixels take its height (4 pixels x 5 / 50 px focal = 0.4 world units: its
+// horizontal runs reach the image's edges), the wall says nothing (every run of it reaches an
+// edge: -1), and the 6 rows of a tilted floor (above a strip at depth 2) are one run however
+// much its depth changes from row to row, up to the largest thickness given (1.5).
+TEST(ThicknessExtent, BoundsEachPixelByTheSmallerRunOfItsSurface) {
+  constexpr int kW = 64, kH = 32;
+  Camera cam;
+  cam.width = kW, cam.height = kH, cam.fx = cam.fy = 50, cam.cx = kW / 2.0, cam.cy = kH / 2.0;
+  ViewGBuffer v;
+  v.width = kW, v.height = kH;
+  v.position.resize(v.pixels());
+  v.normal.resize(v.pixels());
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x) {
+      const size_t i = size_t(y) * kW + x;
+      const bool bar = y >= 10 && y < 14, floor = y >= 24 && y < 30, strip = y >= 30;
+      // The floor: z grows 5 % a row (a plane seen at a grazing angle).
+      const double z = bar ? 5.0 : floor ? 12.0 * std::pow(1.05, y - 24) : strip ? 2.0 : 10.0;
+      v.position[i] = Vec3(cam.unproject(x + 0.5, y + 0.5, z));
+      v.normal[i] =
+          floor
+              ? normalize_or_zero(cross(
+                    v.position[i] - Vec3(cam.unproject(x + 0.5, y - 0.5, z / 1.05)), Vec3{1, 0, 0}))
+              : Vec3{0, 0, -1};
+    }
+  thickness_from_extent(v, cam, 0.05f, 1.5f);
+  ASSERT_EQ(v.thickness.size(), v.pixels());
+  for (int x = 0; x < kW; ++x) {
+    EXPECT_NEAR(v.thickness[size_t(12) * kW + x], 0.4f, 1e-6) << x;  // the bar
+    EXPECT_EQ(v.thickness[size_t(5) * kW + x], -1.f) << x;           // the wall above it
+    const size_t f = size_t(24) * kW + x;  // the floor's first row: 6 rows at depth 12
+    EXPECT_NEAR(v.thickness[f], 6 * 12.0 / 50, 1e-5) << x;
+    EXPECT_EQ(v.thickness[size_t(29) * kW + x], 1.5f) << x;  // its last, farther: at most 1.5
+  }
+}
+
 }  // namespace
 }  // namespace hbil

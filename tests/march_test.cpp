@@ -153,6 +153,18 @@ TEST(MarchSimd, MatchesScalarOnBlenderSample) {
     radiance[i] = Vec3{g.diffcol[i].x * g.diffdir[i].x, g.diffcol[i].y * g.diffdir[i].y,
                        g.diffcol[i].z * g.diffdir[i].z};
   compare_kernels(v, make_horizon_config(p, cam), &radiance, 2);
+  // Without it, the thickness from each object's extent (thickness_extent): some texels have
+  // one, some say nothing (the constant).
+  const Params no_back = apply_set(p, "passes.backdepth=\"\"");
+  const Sample plain = room_poles_frame3(no_back);
+  size_t bounded = 0, open = 0;
+  for (size_t i = 0; i < plain.v.pixels(); ++i) {
+    if (plain.v.is_background(i)) continue;
+    plain.v.thickness[i] < 0.f ? ++open : ++bounded;
+  }
+  EXPECT_GT(bounded, 1000u);
+  EXPECT_GT(open, 1000u);
+  compare_kernels(plain.v, make_horizon_config(no_back, cam), &radiance, 2);
 }
 
 // Every instruction set the machine has gives the same bits (so do frames computed on farm
@@ -174,6 +186,10 @@ TEST(MarchSimd, EveryInstructionSetGivesTheSameBits) {
     compare_kernels(sample.v, c, &radiance, 2);
     c.fill = Vec3{0.05f, 0.1f, 0.15f};  // unseen_radiance
     compare_kernels(sample.v, c, &radiance, 2);
+    // Without the back-face layer: the thickness from each object's extent.
+    ViewGBuffer bounded = sample.v;
+    thickness_from_extent(bounded, sample.cam, float(p.depth_tolerance), float(p.thickness));
+    compare_kernels(bounded, make_horizon_config(p, sample.cam), &radiance, 2);
   }
   std::cout << "\n";
   hwy::SetSupportedTargetsForTest(0);

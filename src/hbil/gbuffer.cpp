@@ -138,7 +138,51 @@ ViewGBuffer make_view_gbuffer(const GBuffer& g, const Camera& cam, const Params&
       }
     }
   });
+  if (!back && p.thickness_extent && p.method == "bitmask")
+    thickness_from_extent(v, cam, float(p.depth_tolerance), float(p.thickness));
   return v;
+}
+
+void thickness_from_extent(ViewGBuffer& v, const Camera& cam, float depth_tolerance,
+                           float at_most) {
+  const int w = v.width, h = v.height;
+  const size_t n = v.pixels();
+  // Run lengths of the surface through each pixel along its row and its column: neighbours
+  // continue the run while they lie within depth_tolerance x depth of its tangent plane
+  // (the spatial filter's test, without the normal's: a box's faces are one object); a run
+  // that reaches the image's edge has no known end (infinite).
+  constexpr float kOpen = HUGE_VALF;
+  std::vector<float> across(n, 0.f), down(n, 0.f);
+  auto runs = [&](int lines, int length, auto at, std::vector<float>& out) {
+    tbb::parallel_for(0, lines, [&](int line) {
+      int start = 0;
+      for (int k = 1; k <= length; ++k) {
+        const size_t a = at(line, k - 1);
+        bool joined = false;
+        if (k < length && !v.is_background(a)) {
+          const size_t b = at(line, k);
+          joined =
+              !v.is_background(b) && std::fabs(dot(v.position[b] - v.position[a], v.normal[a])) <=
+                                         depth_tolerance * v.position[a].z;
+        }
+        if (joined) continue;
+        const bool open = start == 0 || k == length;
+        for (int q = start; q < k; ++q) out[at(line, q)] = open ? kOpen : float(k - start);
+        start = k;
+      }
+    });
+  };
+  runs(
+      h, w, [w](int y, int x) { return size_t(y) * size_t(w) + size_t(x); }, across);
+  runs(
+      w, h, [w](int x, int y) { return size_t(y) * size_t(w) + size_t(x); }, down);
+  const float pixel = 2.f / float(cam.fx + cam.fy);  // world size of a pixel per unit depth
+  v.thickness.assign(n, -1.f);
+  for (size_t i = 0; i < n; ++i) {
+    if (v.is_background(i)) continue;
+    const float extent = std::min(across[i], down[i]);
+    if (extent < kOpen) v.thickness[i] = std::min(extent * pixel * v.position[i].z, at_most);
+  }
 }
 
 }  // namespace hbil

@@ -61,8 +61,9 @@ struct ViewGBuffer {
   int width = 0, height = 0;
   std::vector<Vec3> position;
   std::vector<Vec3> normal;
-  // Occluder thickness along each pixel's view ray, world units, from the back-face depth:
-  // empty without one; negative where it says nothing (the constant thickness applies).
+  // Occluder thickness along each pixel's view ray, world units, from the back-face depth
+  // (or, without one, from the object's extent on screen: thickness_from_extent); empty
+  // without either; negative where it says nothing (the constant thickness applies).
   std::vector<float> thickness;
   // Full-resolution pixels per pixel of this buffer along x and y: 1, or f for a buffer made by
   // reduce_view (reduced.h) from every f-th pixel of every f-th row.
@@ -79,8 +80,17 @@ struct ViewGBuffer {
 // them across silhouettes, so their length can fall to 0.25). With a back-face depth zb and
 // front depth zf (both planar), thickness = |P| (zb − zf) / zf, the length of the pixel's ray
 // inside the object; where zb is background or not behind zf by more than 0.1 % (the
-// visible surface is itself a back face, or a single-sided surface), it is −1.
+// visible surface is itself a back face, or a single-sided surface), it is −1. Without a
+// back-face layer, with p.thickness_extent and the bitmask method, thickness_from_extent.
 ViewGBuffer make_view_gbuffer(const GBuffer& g, const Camera& cam, const Params& p);
+
+// Without a back-face layer, an object is taken to be as thick as it is wide, up to
+// `at_most` (the constant thickness): each geometry pixel's thickness is the smaller of the
+// world extents of its surface's run along its row and along its column (pixels x depth /
+// focal length), at most at_most; a pixel both of whose runs reach the image's edge says
+// nothing (-1: the constant applies). A run ends where a neighbour leaves the tangent plane
+// by more than depth_tolerance x depth. The march treats it as a measured thickness.
+void thickness_from_extent(ViewGBuffer& v, const Camera& cam, float depth_tolerance, float at_most);
 
 // The pixels that are background only because their normal has zero length (all three
 // components 0): covered (alpha > 0 or no alpha), in front of the background (depth below

@@ -73,6 +73,10 @@ const std::vector<ParamInfo>& params_table() {
        "method bitmask: the thickness of the gather-only samples (between radius and "
        "gather_radius), which light and shadow irradiance but not ao; \"auto\" (default): "
        "0.3 x the first frame's median depth where thickness is auto, else thickness"},
+      {"thickness_extent", &Params::thickness_extent, 0, 1, "bool",
+       "method bitmask, frames without a back-face layer: an object is taken to be as thick as "
+       "it is wide, up to thickness: each pixel's thickness is the smaller world extent of its "
+       "surface along its row and its column on screen, used as a back-face layer's would be"},
       {"thickness_growth", &Params::thickness_growth, 0, 1e3, "per world unit",
        "method bitmask: thickness added per world unit of the sample's depth"},
       {"gather_radius", &Params::gather_radius, 0, 1e6, "world units",

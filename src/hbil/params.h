@@ -42,7 +42,10 @@ struct Params {
   double gather_thickness = 0.4;
   bool gather_thickness_auto = true;
   double thickness_growth = 0.0;  // bitmask: extra thickness per world unit of sample depth
-  int bounces = 1;                // in-frame bounces of indirect light (1 = one bounce)
+  // bitmask, frames without a back-face layer: each pixel's thickness is the
+  // world extent of its surface on screen, up to thickness (thickness_from_extent, gbuffer.h).
+  bool thickness_extent = true;
+  int bounces = 1;  // in-frame bounces of indirect light (1 = one bounce)
   // gather_steps: the best indirect error against the samples' 1-bounce Cycles references
   // (README "Indirect light"): 16 more samples per side.
   double gather_radius = 4.0;  // irradiance gather reach, world units (<= radius: radius)
