@@ -84,6 +84,24 @@ inline std::vector<HalfPlane> v_groove(double gamma,
            length_b}};
 }
 
+// The right-angled groove with a unit-wide wall (v_groove(π/2, 1)) seen from 2.5 along its
+// bisector, the view turned by yaw_deg about world z through the eye; DiffCol 0.8 everywhere,
+// DiffDir 1 on the wall, 0 on the floor: the lit-wall scene of the temporal tests.
+inline GBuffer lit_groove(Camera& cam, double yaw_deg, int w, int h, double fov_deg) {
+  const Vec3d bisector{0, std::cos(M_PI / 4), std::sin(M_PI / 4)};
+  const Vec3d eye = bisector * 2.5, look = bisector * 0.4 - eye;
+  const double a = yaw_deg * M_PI / 180;
+  const Vec3d turned{look.x * std::cos(a) - look.y * std::sin(a),
+                     look.x * std::sin(a) + look.y * std::cos(a), look.z};
+  cam = look_at(w, h, fov_deg, eye, eye + turned);
+  GBuffer g = ray_cast(cam, v_groove(M_PI / 2, 1.0));
+  g.diffcol.assign(g.pixels(), Vec3{0.8f, 0.8f, 0.8f});
+  g.diffdir.assign(g.pixels(), Vec3{});
+  for (size_t i = 0; i < g.pixels(); ++i)
+    if (g.depth[i] < 1e9f && g.normal[i].z < 0.99f) g.diffdir[i] = Vec3{1, 1, 1};
+  return g;
+}
+
 // A V-groove of 75 degrees with a slanted occluder, seen at an odd resolution (partial 4x4
 // blocks): the scene of the thread-determinism tests.
 inline GBuffer busy_scene(Camera& cam) {

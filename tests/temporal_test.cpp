@@ -26,17 +26,8 @@ struct Scene {
   GBuffer g;
 };
 Scene groove(double yaw_deg = 0, int w = 96, int h = 96) {
-  const Vec3d bisector{0, std::cos(kPi / 4), std::sin(kPi / 4)};
-  const Vec3d eye = bisector * 2.5, look = bisector * 0.4 - eye;
-  const double a = yaw_deg * kPi / 180;  // about world z through the eye
-  const Vec3d turned{look.x * std::cos(a) - look.y * std::sin(a),
-                     look.x * std::sin(a) + look.y * std::cos(a), look.z};
-  Scene s{test::look_at(w, h, 90, eye, eye + turned), GBuffer{}};
-  s.g = test::ray_cast(s.cam, test::v_groove(kPi / 2, 1.0));
-  s.g.diffcol.assign(s.g.pixels(), Vec3{0.8f, 0.8f, 0.8f});
-  s.g.diffdir.assign(s.g.pixels(), Vec3{});
-  for (size_t i = 0; i < s.g.pixels(); ++i)
-    if (s.g.depth[i] < 1e9f && s.g.normal[i].z < 0.99f) s.g.diffdir[i] = Vec3{1, 1, 1};
+  Scene s;
+  s.g = test::lit_groove(s.cam, yaw_deg, w, h, 90);
   return s;
 }
 

@@ -13,6 +13,9 @@ cut:    frames 1-3 dolly slowly as in room_poles; frame 4 cuts hard to the oppos
         looking back at the window wall, and frames 4-6 dolly slowly there.
 long:   64 frames dollying and panning slowly from room_poles' frame-1 pose towards the
         poles (1.6 cm and 0.5 degrees a frame), for farm chunks and their seams.
+pan:    12 frames panning 10 degrees a frame from the window wall, whose sunlit floor patch
+        fills frame 1, to the green wall, which the patch lights from off screen (the
+        radiance cache's measurements).
 Same scene, lights and render settings as room_poles.py (hbil_common.py).
 """
 import math
@@ -23,7 +26,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import hbil_common as H  # noqa: E402
 import room_poles  # noqa: E402
 
-SHOT = H.pop_choice("--shot", ("static", "cut", "long"))
+SHOT = H.pop_choice("--shot", ("static", "cut", "long", "pan"))
 
 
 def build(scene):
@@ -34,6 +37,15 @@ def build(scene):
              rotation_euler=(math.radians(74.0), 0.0, math.radians(16.0)))
     if SHOT == "static":
         H.key(cam, 1, **a)
+        return
+    if SHOT == "pan":
+        H.key(cam, 1, location=(0.60, -1.50, 1.50),
+              rotation_euler=(math.radians(70.0), 0.0, math.radians(60.0)))
+        H.key(cam, 12, location=(0.60, -1.50, 1.50),
+              rotation_euler=(math.radians(70.0), 0.0, math.radians(-50.0)))
+        for fc in cam.animation_data.action.fcurves:
+            for k in fc.keyframe_points:
+                k.interpolation = "LINEAR"
         return
     if SHOT == "long":
         H.key(cam, 1, **a)

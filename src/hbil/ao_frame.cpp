@@ -121,6 +121,14 @@ HorizonImage search_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& 
   // (params.h), the same for every bounce.
   const Vec3 unseen_auto =
       gather && p.unseen_radiance_auto ? mean_direct_radiance(v, g) * kAutoUnseen : Vec3{};
+  // The radiance cache's fill per searched pixel, with unseen_radiance where it knows nothing.
+  std::vector<Vec3> fill_map;
+  if (gather && in.cache && !in.cache->empty()) {
+    const float u = float(p.unseen_radiance);
+    fill_map =
+        in.cache->fill_map(sv, cam, in.frame, p.unseen_radiance_auto ? unseen_auto : Vec3{u, u, u});
+    c.fill_map = fill_map.data();
+  }
   const bool fresnel = !g.f0.empty() || !g.metallic.empty();
   for (int bounce = 0; bounce < (gather ? p.bounces : 1); ++bounce) {
     std::vector<Vec3> L;

@@ -10,6 +10,7 @@
 #include "hbil/gbuffer.h"
 #include "hbil/interleave.h"
 #include "hbil/params.h"
+#include "hbil/radiance_cache.h"
 
 namespace hbil {
 
@@ -54,6 +55,9 @@ struct FrameInputs {
   // E/π per pixel added to DiffDir in the source radiance of the first bounce (the previous
   // frame's indirect light, reprojected), or empty. search_frame releases it once used.
   std::vector<Vec3> feedback;
+  // What earlier frames showed off screen (radiance_cache.h), or null: the gather's empty
+  // directions see unseen_radiance alone.
+  const RadianceCache* cache = nullptr;
 };
 Params resolve_frame_outputs(const GBuffer& g, const Params& requested);
 // unseen_radiance "auto" = kAutoUnseen x the mean over the frame's geometry pixels of its

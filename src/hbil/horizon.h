@@ -65,6 +65,9 @@ struct HorizonConfig {
   // band between the horizon march's two gather horizons). Zero: those directions send nothing.
   Vec3 fill;
   bool has_fill() const { return fill.x != 0.f || fill.y != 0.f || fill.z != 0.f; }
+  // The same per pixel (indexed like the searched ViewGBuffer), or null: `fill` everywhere.
+  // The radiance cache's estimate of what each pixel's unseen directions see (cache.h).
+  const Vec3* fill_map = nullptr;
   // Temporal chain (HBIL §3.3 with accumulation): every slice angle turns by `rotation`
   // (radians) and every step jitter shifts by `jitter_shift` (mod 1), both from the frame.
   float rotation = 0, jitter_shift = 0;
@@ -99,7 +102,14 @@ struct SampleView {
   // Bitmask occluder thickness along the view ray per texel (from back faces); null or a
   // negative value: the constant of HorizonConfig.
   const float* thickness = nullptr;
+  // HorizonConfig::fill per texel (from its fill_map), or null: HorizonConfig::fill.
+  const Vec3* fill = nullptr;
   std::ptrdiff_t index(int i, int j) const { return j * row + i * col; }
+  // Whether a gathering march lights its empty directions, and with what at texel (i, j).
+  bool fills(const HorizonConfig& c) const { return radiance && (fill || c.has_fill()); }
+  Vec3 fill_at(const HorizonConfig& c, int i, int j) const {
+    return fill ? fill[index(i, j)] : c.fill;
+  }
 };
 
 // Sums over the slices of one pixel (means are taken by the caller).

@@ -65,7 +65,8 @@ HorizonImage horizon_full(const ViewGBuffer& g, const HorizonConfig& c, int slic
                         g.width,
                         g.scale,
                         radiance ? radiance->data() : nullptr,
-                        g.thickness.empty() ? nullptr : g.thickness.data()};
+                        g.thickness.empty() ? nullptr : g.thickness.data(),
+                        c.fill_map};
   tbb::parallel_for(0, g.height, [&](int y) {
     if (c.vectorised) {
       std::vector<PixelSums> row(g.width);
@@ -97,7 +98,7 @@ HorizonImage horizon_interleaved(const ViewGBuffer& g, const HorizonConfig& c, i
   // Sub-buffer of phase (ox, oy): texel (i, j) is full-resolution pixel (4i + ox, 4j + oy).
   struct Sub {
     int ox, oy, w, h;
-    std::vector<Vec3> pos, nrm, rad;  // contiguous copies (empty when reading in place)
+    std::vector<Vec3> pos, nrm, rad, fill;  // contiguous copies (empty when reading in place)
     std::vector<float> thick;
     SampleView view;
     std::vector<float> phi;
@@ -124,6 +125,7 @@ HorizonImage horizon_interleaved(const ViewGBuffer& g, const HorizonConfig& c, i
       s.nrm.resize(size_t(s.w) * s.h);
       if (radiance) s.rad.resize(size_t(s.w) * s.h);
       if (!g.thickness.empty()) s.thick.resize(size_t(s.w) * s.h);
+      if (c.fill_map) s.fill.resize(size_t(s.w) * s.h);
       for (int j = 0; j < s.h; ++j)
         for (int i = 0; i < s.w; ++i) {
           const size_t src = size_t(4 * j + s.oy) * g.width + (4 * i + s.ox);
@@ -131,6 +133,7 @@ HorizonImage horizon_interleaved(const ViewGBuffer& g, const HorizonConfig& c, i
           s.nrm[size_t(j) * s.w + i] = g.normal[src];
           if (radiance) s.rad[size_t(j) * s.w + i] = (*radiance)[src];
           if (!s.thick.empty()) s.thick[size_t(j) * s.w + i] = g.thickness[src];
+          if (!s.fill.empty()) s.fill[size_t(j) * s.w + i] = c.fill_map[src];
         }
       s.view = SampleView{s.pos.data(),
                           s.nrm.data(),
@@ -140,7 +143,8 @@ HorizonImage horizon_interleaved(const ViewGBuffer& g, const HorizonConfig& c, i
                           s.w,
                           4 * g.scale,
                           radiance ? s.rad.data() : nullptr,
-                          s.thick.empty() ? nullptr : s.thick.data()};
+                          s.thick.empty() ? nullptr : s.thick.data(),
+                          s.fill.empty() ? nullptr : s.fill.data()};
     } else {
       const size_t first = size_t(s.oy) * g.width + s.ox;
       s.view = SampleView{g.position.data() + first,
@@ -151,7 +155,8 @@ HorizonImage horizon_interleaved(const ViewGBuffer& g, const HorizonConfig& c, i
                           std::ptrdiff_t(4) * g.width,
                           4 * g.scale,
                           radiance ? radiance->data() + first : nullptr,
-                          g.thickness.empty() ? nullptr : g.thickness.data() + first};
+                          g.thickness.empty() ? nullptr : g.thickness.data() + first,
+                          c.fill_map ? c.fill_map + first : nullptr};
     }
   });
   // March every sub-buffer row; write results back to full resolution (re-interleave).
@@ -170,7 +175,8 @@ HorizonImage horizon_interleaved(const ViewGBuffer& g, const HorizonConfig& c, i
         const size_t dst = size_t(4 * j + s.oy) * g.width + (4 * i + s.ox);
         if (g.is_background(dst)) continue;
         out.irradiance[dst] =
-            replay_gather(log, s.view.radiance, c.fill, slices, entry, count) / float(slices);
+            replay_gather(log, s.view.radiance, s.view.fill_at(c, i, j), slices, entry, count) /
+            float(slices);
       }
       return;
     }

@@ -144,11 +144,11 @@ PixelSums march_bitmask_pixel(const SampleView& view, int i, int j, const Vec3& 
       }
     }
     // The directions the gather found empty see `fill` (logged as one entry, last).
-    if (m.gather && c.has_fill()) {
+    if (m.gather && view.fills(c)) {
       float w = 0.f;
       for (int k = 0; k < kSectors; ++k)
         if (!(occluded_g >> k & 1u)) w += bound[k + 1].ao - bound[k].ao;
-      irradiance += c.fill * w;
+      irradiance += view.fill_at(c, i, j) * w;
       if (log) log->entries.push_back({GatherEntry::kFillSource, 1.f, w});
     }
     for (int k = 0; k < kSectors; ++k) {

@@ -58,8 +58,8 @@ void MarchBitmaskRow(const SampleView& view, int i0, int j, int count, const flo
   const VF stride = hn::Set(d, float(view.stride));
   const VF grazing2 = hn::Set(d, kGrazing2);
   const MF none = hn::FirstN(d, 0);
-  const bool has_fill = gather && c.has_fill();
-  const V3 fill{hn::Set(d, c.fill.x), hn::Set(d, c.fill.y), hn::Set(d, c.fill.z)};
+  const bool has_fill = gather && view.fills(c);
+  const V3 fill_c{hn::Set(d, c.fill.x), hn::Set(d, c.fill.y), hn::Set(d, c.fill.z)};
 
   // Per-lane scratch: the boundary antiderivatives (33 per lane) and the slice angles.
   HWY_ALIGN float b_ao[(kSectors + 1) * kMaxLanes];
@@ -250,6 +250,7 @@ void MarchBitmaskRow(const SampleView& view, int i0, int j, int count, const flo
           const VF dw = hn::Sub(hn::Load(d, b_ao + (k + 1) * N), hn::Load(d, b_ao + k * N));
           w = hn::IfThenElse(open_g, hn::Add(w, dw), w);
         }
+        const V3 fill = view.fill ? Gather3(d, view.fill, px.own3) : fill_c;
         irradiance = Add3(irradiance, Scale(fill, w));
         if (log) {
           HWY_ALIGN float w_lane[kMaxLanes], live_lane[kMaxLanes];

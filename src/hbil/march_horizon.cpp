@@ -62,9 +62,9 @@ PixelSums march_horizon_pixel(const SampleView& view, int i, int j, const Vec3& 
       }
     }
     // The band between the gather's horizons, where it found nothing, sees `fill`.
-    if (m.gather && c.has_fill()) {
+    if (m.gather && view.fills(c)) {
       const float w = h0_g.t < h1_g.t ? G(h1_g).ao - G(h0_g).ao : 0.f;
-      irradiance += c.fill * w;
+      irradiance += view.fill_at(c, i, j) * w;
     }
     theta1 = std::max(theta1, theta0);
     const SliceTerms t = integrate_slice(theta0, theta1, L.nx, L.ny);

@@ -33,8 +33,8 @@ void MarchHorizonRow(const SampleView& view, int i0, int j, int count, const flo
   const size_t N = hn::Lanes(d);
   const bool gather = view.radiance != nullptr;
   const VF zero = hn::Zero(d), one = hn::Set(d, 1.f);
-  const bool has_fill = gather && c.has_fill();
-  const V3 fill{hn::Set(d, c.fill.x), hn::Set(d, c.fill.y), hn::Set(d, c.fill.z)};
+  const bool has_fill = gather && view.fills(c);
+  const V3 fill_c{hn::Set(d, c.fill.x), hn::Set(d, c.fill.y), hn::Set(d, c.fill.z)};
   HWY_ALIGN float lane_a[kMaxLanes], lane_b[kMaxLanes], lane_c[kMaxLanes], lane_d[kMaxLanes];
   // Per lane: sin and cos of `t` from libm, as the scalar march takes them.
   auto sin_cos = [&](VF t, VF& s, VF& co) {
@@ -109,6 +109,7 @@ void MarchHorizonRow(const SampleView& view, int i0, int j, int count, const flo
         const VF g1 = AntiderivativeAt(d, h1_t, h1_s, h1_c, L.nx, L.ny).ao;
         const VF g0 = AntiderivativeAt(d, h0_t, h0_s, h0_c, L.nx, L.ny).ao;
         const VF w = hn::IfThenElseZero(hn::Lt(h0_t, h1_t), hn::Sub(g1, g0));
+        const V3 fill = view.fill ? Gather3(d, view.fill, px.own3) : fill_c;
         irradiance = Add3(irradiance, Scale(fill, w));
       }
       // std::max(theta1, theta0); integrate_slice(theta0, theta1, nx, ny).

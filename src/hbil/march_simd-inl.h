@@ -103,6 +103,7 @@ HWY_INLINE VF FacingWeight(DF d, VF n_dot_d3, VF dist) {
 // the run read the run's first texel and, like background texels, are not `valid`.
 struct PixelLanes {
   VI ii;     // the lane's texel column
+  VI own3;   // 3 x the lane's texel index in the view (SampleView::index)
   MF valid;  // a geometry texel of the run
   V3 P, n, wo, ray_P, e1, e2;
   VF r_tex, rg_tex;
@@ -130,9 +131,9 @@ HWY_INLINE PixelLanes LoadPixels(DF d, const SampleView& view, int i0, int j, in
   const VI i_safe = hn::IfThenElse(hn::RebindMask(di, in_run), px.ii, hn::Set(di, i0));
   const VI own = hn::Add(hn::Mul(hn::Set(di, int(view.row)), hn::Set(di, j)),
                          hn::Mul(i_safe, hn::Set(di, int(view.col))));
-  const VI own3 = hn::Mul(own, hn::Set(di, 3));
-  px.P = Gather3(d, view.position, own3);
-  px.n = Gather3(d, view.normal, own3);
+  px.own3 = hn::Mul(own, hn::Set(di, 3));
+  px.P = Gather3(d, view.position, px.own3);
+  px.n = Gather3(d, view.normal, px.own3);
   px.valid = hn::And(in_run, hn::Lt(px.P.z, hn::Set(d, ViewGBuffer::kBackground)));
   const V3& P = px.P;
   px.wo = NormalizeOrZero(d, {hn::Neg(P.x), hn::Neg(P.y), hn::Neg(P.z)});

@@ -115,6 +115,10 @@ const std::vector<ParamInfo>& params_table() {
        "memory of at most 2W - 2 frames (two plain means restarted every 2W frames, W apart, "
        "blended so that neither restart shows), so that a farm chunk with 2W - 2 frames of "
        "pre-roll starts as the whole run would"},
+      {"radiance_cache", &Params::radiance_cache, 0, 256, "frames",
+       "temporal: the gather's empty directions that leave the frame see the surfaces the last "
+       "this many frames showed there (a world-space cache of their positions and outgoing "
+       "radiance, looked up from the camera); unseen_radiance where none did; 0: off"},
       {"history_depth_tolerance", &Params::history_depth_tolerance, 0, 1, "relative",
        "temporal: history whose reprojected depth differs by more than this fraction is "
        "rejected"},

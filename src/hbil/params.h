@@ -70,6 +70,9 @@ struct Params {
   double history_weight = 0.9;  // exponential blend: weight of the history once converged
   int history_max = 16;         // history length cap (frames); 1/n blend until then
   int history_window = 0;       // > 0: finite memory, two staggered plain means (temporal.h)
+  // > 0: the off-screen directions see what the last this many frames showed there
+  // (radiance_cache.h); 0: unseen_radiance only.
+  int radiance_cache = 0;
   double history_depth_tolerance = 0.05;  // relative depth mismatch that rejects history
   double history_normal_cos = 0.8;        // cosine between normals below which history is rejected
   double cut_rejected = 0.6;     // a frame whose history is rejected on more pixels is a cut

@@ -77,7 +77,7 @@ std::string camera_cut(const Camera& prev, const Camera& cur, double depth, cons
   return s.str();
 }
 
-TemporalChain::TemporalChain(Params p) : p_(std::move(p)) {}
+TemporalChain::TemporalChain(Params p) : p_(std::move(p)), cache_(std::max(1, p_.radiance_cache)) {}
 
 AoFrame TemporalChain::process(const GBuffer& g, const Camera& cam, int frame, bool cut,
                                const SH9* environment, TemporalReport* report) {
@@ -157,12 +157,16 @@ AoFrame TemporalChain::run(const GBuffer& g, GBuffer* release, const Camera& cam
   std::vector<float>().swap(data_);
   view_ = ViewGBuffer{};
   if (!history) r = Reprojected{};
+  // The radiance cache holds the frames since the last cut (a cut may be another set).
+  const bool cache = p_.radiance_cache > 0 && gathers(p_);
+  if (cut || rep.first) cache_.clear();
 
   // Feedback: the history's irradiance, with its holes filled by push/pull.
   const bool gather = gathers(p_);
   FrameInputs in;
   in.rotate = true;
   in.frame = frame;
+  if (cache) in.cache = &cache_;
   std::vector<Vec3>& feedback = in.feedback;
   if (history && gather && p_.feedback) {
     std::vector<float> e(3 * n_px), depth(n_px);
@@ -266,6 +270,7 @@ AoFrame TemporalChain::run(const GBuffer& g, GBuffer* release, const Camera& cam
       if (!n_out.empty()) n_out[i] = n_sum;
     }
   });
+  if (cache && has_e) cache_.add(v, cam, g, h.irradiance, frame);
   AoFrame out = assemble_frame(v, g, cam, p_, std::move(h), environment, release);
   if (p_.wants("history")) out.history = std::move(n_out);
   view_ = std::move(v);

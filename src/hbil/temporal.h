@@ -38,6 +38,7 @@
 #include "hbil/farfield.h"
 #include "hbil/gbuffer.h"
 #include "hbil/params.h"
+#include "hbil/radiance_cache.h"
 
 namespace hbil {
 
@@ -90,6 +91,7 @@ class TemporalChain {
   Camera cam_;               // and camera
   int frame_ = 0;            // and frame number
   std::vector<float> data_;  // kChannels per pixel
+  RadianceCache cache_;      // radiance_cache > 0: what the last frames showed
 };
 
 }  // namespace hbil

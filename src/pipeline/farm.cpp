@@ -40,7 +40,8 @@ std::string job_name(const FarmPlan& plan, const SlurmSettings& s) {
 
 int window_preroll(const Params& p, int frame, int step) {
   if (!p.temporal || p.history_window <= 0) return 0;
-  const int memory = window_memory(p.history_window, frame);
+  // The radiance cache reads the frames of its last radiance_cache frame numbers.
+  const int memory = std::max(window_memory(p.history_window, frame), p.radiance_cache);
   return (memory + std::max(step, 1) - 1) / std::max(step, 1) + kFeedbackSettle;
 }
 
@@ -55,7 +56,7 @@ int seam_preroll(const Params& p, std::string* why) {
     // 64-frame moves, W = 6: at most 1.5e-4 at the starts the plan picks, with W − 1 +
     // kFeedbackSettle = 8 frames; 7.8e-5 at the worst start, with 2W − 2 + 3 = 13).
     const int w = p.history_window;
-    const int preroll = 2 * w - 2 + kFeedbackSettle;
+    const int preroll = std::max(2 * w - 2, p.radiance_cache) + kFeedbackSettle;
     if (why) {
       std::ostringstream s;
       s << "history_window " << w << ": a frame's means reach back at most " << 2 * w - 2
@@ -77,9 +78,11 @@ int seam_preroll(const Params& p, std::string* why) {
   constexpr double kColdDifference = 0.02;
   const double w = std::clamp(p.history_weight, 0.0, 0.99);
   const double r = w + (1 - w) * (p.feedback ? 0.2 : 0.0);
-  const int preroll =
+  // At least the radiance cache's frames, which it reads as they were computed.
+  const int preroll = std::max(
+      p.radiance_cache,
       r > 0 ? std::max(0, int(std::ceil(std::log(kSeamTolerance / kColdDifference) / std::log(r))))
-            : 0;
+            : 0);
   if (why) {
     std::ostringstream s;
     s.precision(3);

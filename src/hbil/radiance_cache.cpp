@@ -1,0 +1,172 @@
+// radiance_cache.cpp: see radiance_cache.h.
+#include "hbil/radiance_cache.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace hbil {
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+// Equirectangular map of view-space directions (+x right, +y down, +z forward): column by
+// azimuth atan2(x, z) from -π to π, row by the angle from "up" (-y), 0 at the top row.
+void to_map(const Vec3d& d, int w, int h, double& u, double& v) {
+  const double len = std::sqrt(dot(d, d));
+  const double up = std::clamp(-d.y / len, -1.0, 1.0);
+  u = (std::atan2(d.x, d.z) / (2 * kPi) + 0.5) * w;
+  v = std::acos(up) / kPi * h;
+}
+Vec3d from_map(double u, double v, int w, int h) {
+  const double phi = (u / w - 0.5) * 2 * kPi, theta = v / h * kPi;
+  return {std::sin(theta) * std::sin(phi), -std::cos(theta), std::sin(theta) * std::cos(phi)};
+}
+bool in_frustum(const Camera& cam, const Vec3d& d) {
+  if (!(d.z > 0)) return false;
+  double u, v;
+  cam.project(d, u, v);
+  return u >= 0 && u <= cam.width && v >= 0 && v <= cam.height;
+}
+
+}  // namespace
+
+void RadianceCache::add(const ViewGBuffer& v, const Camera& cam, const GBuffer& g,
+                        const std::vector<Vec3>& E, int frame) {
+  // Entries no later frame reads (frame + 1 reads from frame + 1 - frames_ on).
+  const int oldest = frame + 1 - frames_;
+  entries_.erase(std::remove_if(entries_.begin(), entries_.end(),
+                                [&](const Entry& e) { return e.frame < oldest; }),
+                 entries_.end());
+  const int s = std::max(1, (v.width + kColumns - 1) / kColumns);
+  for (int y = s / 2; y < v.height; y += s)
+    for (int x = s / 2; x < v.width; x += s) {
+      const size_t i = size_t(y) * v.width + x;
+      if (v.is_background(i)) {
+        const Vec3d ray = cam.unproject(x + 0.5, y + 0.5, 1.0);
+        entries_.push_back(
+            {Vec3(normalize_or_zero(cam.view_dir_to_world(ray))), Vec3{}, frame, true});
+      } else {
+        const Vec3 &a = g.diffcol[i], e = g.diffdir[i] + E[i];
+        Vec3 l{a.x * e.x, a.y * e.y, a.z * e.z};
+        if (!g.emit.empty()) l += g.emit[i];
+        if (!(std::isfinite(l.x) && std::isfinite(l.y) && std::isfinite(l.z))) continue;
+        entries_.push_back({Vec3(cam.view_to_world(Vec3d(v.position[i]))), l, frame, false});
+      }
+    }
+}
+
+std::vector<Vec3> RadianceCache::fill_table(const Camera& cam, int frame, Vec3 fallback) const {
+  constexpr int W = kProbeWidth, H = kProbeHeight, n_tex = W * H;
+  // 1. The probe: nearest distance per texel, then the mean of the entries within the band.
+  std::vector<float> nearest(n_tex, HUGE_VALF);
+  std::vector<int> texel(entries_.size(), -1);
+  std::vector<float> dist(entries_.size(), HUGE_VALF);
+  std::vector<unsigned char> sky(n_tex, 0);
+  for (size_t k = 0; k < entries_.size(); ++k) {
+    const Entry& e = entries_[k];
+    if (e.frame >= frame || e.frame < frame - frames_) continue;
+    const Vec3d d = e.sky ? cam.world_dir_to_view(Vec3d(e.p)) : cam.world_to_view(Vec3d(e.p));
+    const double len = std::sqrt(dot(d, d));
+    // What the frame shows now is searched on screen (and keeps a static camera's fill).
+    if (!(len > 0) || in_frustum(cam, d)) continue;
+    double u, v;
+    to_map(d, W, H, u, v);
+    const int tx = std::clamp(int(u), 0, W - 1), ty = std::clamp(int(v), 0, H - 1);
+    texel[k] = ty * W + tx;
+    if (e.sky) {
+      sky[texel[k]] = 1;
+    } else {
+      dist[k] = float(len);
+      nearest[texel[k]] = std::min(nearest[texel[k]], dist[k]);
+    }
+  }
+  std::vector<Vec3> sum(n_tex);
+  std::vector<int> count(n_tex, 0);
+  for (size_t k = 0; k < entries_.size(); ++k) {
+    const int t = texel[k];
+    if (t < 0 || entries_[k].sky || !(dist[k] <= nearest[t] * (1.f + kDepthBand))) continue;
+    sum[t] += entries_[k].L;
+    ++count[t];
+  }
+  // Texel directions, solid angles and whether the frustum holds them.
+  struct Texel {
+    Vec3d d;
+    double omega;
+    bool off_screen;
+    int state;  // 0 unknown, 1 known
+    Vec3 L;
+  };
+  std::vector<Texel> tex(n_tex);
+  for (int ty = 0; ty < H; ++ty) {
+    const double omega = (2 * kPi / W) * (std::cos(ty * kPi / H) - std::cos((ty + 1) * kPi / H));
+    for (int tx = 0; tx < W; ++tx) {
+      Texel& t = tex[ty * W + tx];
+      const int i = ty * W + tx;
+      t.d = from_map(tx + 0.5, ty + 0.5, W, H);
+      t.omega = omega;
+      t.off_screen = !in_frustum(cam, t.d);
+      t.state = count[i] > 0 || sky[i] ? 1 : 0;
+      t.L = count[i] > 0 ? sum[i] * (1.f / float(count[i])) : Vec3{};
+    }
+  }
+  // 2. The fill per normal.
+  std::vector<Vec3> table(size_t(kTableWidth) * kTableHeight);
+  const double eps = kEpsilon * kPi;
+  tbb::parallel_for(0, kTableHeight, [&](int ny) {
+    for (int nx = 0; nx < kTableWidth; ++nx) {
+      const Vec3d n = from_map(nx + 0.5, ny + 0.5, kTableWidth, kTableHeight);
+      Vec3d known{0, 0, 0};
+      double unknown = 0, all = 0;
+      for (const Texel& t : tex) {
+        if (!t.off_screen) continue;
+        const double c = dot(n, t.d);
+        if (!(c > 0)) continue;
+        const double w = c * t.omega;
+        all += w;
+        if (t.state)
+          known = known + Vec3d(t.L) * w;
+        else
+          unknown += w;
+      }
+      const Vec3d fb(fallback);
+      table[size_t(ny) * kTableWidth + nx] =
+          Vec3((known + fb * (unknown + eps)) * (1.0 / (all + eps)));
+    }
+  });
+  return table;
+}
+
+Vec3 RadianceCache::lookup(const std::vector<Vec3>& table, const Vec3& n) {
+  double u, v;
+  to_map(Vec3d(n), kTableWidth, kTableHeight, u, v);
+  u -= 0.5, v -= 0.5;
+  const double fu = std::floor(u), fv = std::floor(v);
+  const double au = u - fu, av = v - fv;
+  const int x0 = int(fu), y0 = int(fv);
+  auto at = [&](int x, int y) {
+    x = ((x % kTableWidth) + kTableWidth) % kTableWidth;
+    y = std::clamp(y, 0, kTableHeight - 1);
+    return Vec3d(table[size_t(y) * kTableWidth + x]);
+  };
+  const Vec3d r = (at(x0, y0) * (1 - au) + at(x0 + 1, y0) * au) * (1 - av) +
+                  (at(x0, y0 + 1) * (1 - au) + at(x0 + 1, y0 + 1) * au) * av;
+  return Vec3(r);
+}
+
+std::vector<Vec3> RadianceCache::fill_map(const ViewGBuffer& v, const Camera& cam, int frame,
+                                          Vec3 fallback) const {
+  const std::vector<Vec3> table = fill_table(cam, frame, fallback);
+  std::vector<Vec3> fill(v.pixels());
+  tbb::parallel_for(0, v.height, [&](int y) {
+    for (int x = 0; x < v.width; ++x) {
+      const size_t i = size_t(y) * v.width + x;
+      if (!v.is_background(i)) fill[i] = lookup(table, v.normal[i]);
+    }
+  });
+  return fill;
+}
+
+}  // namespace hbil

@@ -1,0 +1,180 @@
+// radiance_cache_test.cpp: the radiance cache (radiance_cache.h): closed-form fills of a
+// cache that knows the whole sphere, its window of frames, sky as known darkness, and the
+// temporal chain unchanged by it where it knows nothing off screen.
+#include "hbil/radiance_cache.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "analytic_scenes.h"
+#include "hbil/ao_frame.h"
+#include "hbil/temporal.h"
+#include "test_util.h"
+
+namespace hbil {
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+
+// Frame `frame` of a camera at the origin looking along `axis` (90-degree field of view),
+// inside a sphere of radius 5 whose surface sends radiance L0 (DiffCol 1, DiffDir L0); with
+// `sky`, nothing is there (every pixel background).
+void add_face(RadianceCache& cache, const Vec3d& axis, int frame, float L0, bool sky = false) {
+  const Vec3d up = std::fabs(axis.z) > 0.9 ? Vec3d{0, 1, 0} : Vec3d{0, 0, 1};
+  const Camera cam = test::look_at(48, 48, 90, {0, 0, 0}, axis, up);
+  ViewGBuffer v;
+  v.width = v.height = 48;
+  v.position.resize(48 * 48);
+  v.normal.resize(48 * 48);
+  GBuffer g;
+  g.width = g.height = 48;
+  g.diffcol.assign(48 * 48, Vec3{1, 1, 1});
+  g.diffdir.assign(48 * 48, Vec3{L0, L0, L0});
+  for (int y = 0; y < 48; ++y)
+    for (int x = 0; x < 48; ++x) {
+      const Vec3d d = normalize_or_zero(cam.unproject(x + 0.5, y + 0.5, 1.0)) * 5.0;
+      v.position[size_t(y) * 48 + x] = sky ? Vec3{0, 0, ViewGBuffer::kBackground * 2} : Vec3(d);
+    }
+  cache.add(v, cam, g, std::vector<Vec3>(48 * 48), frame);
+}
+void add_sphere(RadianceCache& cache, int frame, float L0, bool sky = false) {
+  for (const Vec3d& a : {Vec3d{1, 0, 0}, Vec3d{-1, 0, 0}, Vec3d{0, 1, 0}, Vec3d{0, -1, 0},
+                         Vec3d{0, 0, 1}, Vec3d{0, 0, -1}})
+    add_face(cache, a, frame, L0, sky);
+}
+
+// The frame that reads the cache: 60 degrees wide, looking along +y.
+Camera reader() {
+  return test::look_at(64, 36, 60, {0, 0, 0}, {0, 1, 0});
+}
+
+TEST(RadianceCache, ACacheThatKnowsEverySideGivesItsRadianceBehindTheCamera) {
+  RadianceCache cache(8);
+  add_sphere(cache, 3, 2.f);
+  const Camera cam = reader();
+  const std::vector<Vec3> table = cache.fill_table(cam, 4, Vec3{});
+  // A normal facing the camera (view -z) sees off screen in nearly its whole hemisphere, all
+  // of it known: F = L0 A / (A + ε) with A about π, ε = 0.05 π.
+  const Vec3 back = RadianceCache::lookup(table, Vec3{0, 0, -1});
+  EXPECT_NEAR(back.x, 2.0 / (1 + RadianceCache::kEpsilon), 0.02);
+  EXPECT_FLOAT_EQ(back.x, back.y);
+  // Sideways and up the same: the sphere is uniform.
+  for (const Vec3& n : {Vec3{1, 0, 0}, Vec3{-1, 0, 0}, Vec3{0, -1, 0}}) {
+    const Vec3 f = RadianceCache::lookup(table, n);
+    EXPECT_GT(f.x, 1.85f) << n.x << " " << n.y << " " << n.z;
+    EXPECT_LT(f.x, 2.0f);
+  }
+  // A normal along the view axis sees less off screen (the frustum is left out), so the
+  // fallback (0) of ε weighs more, but what it sees is the sphere.
+  const Vec3 ahead = RadianceCache::lookup(table, Vec3{0, 0, 1});
+  EXPECT_GT(ahead.x, 1.5f);
+  EXPECT_LT(ahead.x, back.x);
+}
+
+TEST(RadianceCache, FramesOutsideItsWindowAreNotRead) {
+  RadianceCache cache(8);
+  add_sphere(cache, 3, 2.f);
+  const Camera cam = reader();
+  const Vec3 fb{0.25f, 0.5f, 0.75f};
+  // Frame 3 itself and earlier frames do not read frame 3; frame 11 is 8 after it (reads
+  // 3 .. 10), frame 12 no longer does.
+  for (int frame : {2, 3, 12, 40}) {
+    const Vec3 f = RadianceCache::lookup(cache.fill_table(cam, frame, fb), Vec3{0, 0, -1});
+    EXPECT_FLOAT_EQ(f.x, fb.x) << frame;
+    EXPECT_FLOAT_EQ(f.y, fb.y) << frame;
+    EXPECT_FLOAT_EQ(f.z, fb.z) << frame;
+  }
+  EXPECT_GT(RadianceCache::lookup(cache.fill_table(cam, 11, fb), Vec3{0, 0, -1}).x, 1.5f);
+  // Adding frame 20 drops what no later frame reads.
+  add_face(cache, {0, 1, 0}, 20, 1.f);
+  EXPECT_EQ(cache.size(), size_t(48 * 48));  // frame 20 alone, every pixel (48 < kColumns)
+}
+
+TEST(RadianceCache, SkyIsKnownDarkness) {
+  RadianceCache cache(8);
+  add_sphere(cache, 1, 0.f, /*sky=*/true);
+  const Vec3 fb{1, 1, 1};
+  const Vec3 f = RadianceCache::lookup(cache.fill_table(reader(), 2, fb), Vec3{0, 0, -1});
+  // Only ε keeps the fallback: ε / (A + ε) with A about π.
+  EXPECT_NEAR(f.x, RadianceCache::kEpsilon / (1 + RadianceCache::kEpsilon), 0.01);
+}
+
+// The groove of temporal_test.cpp, seen by a camera turned `yaw` degrees.
+struct Scene {
+  Camera cam;
+  GBuffer g;
+};
+Scene groove(double yaw_deg) {
+  Scene s;
+  s.g = test::lit_groove(s.cam, yaw_deg, 96, 96, 70);
+  return s;
+}
+std::vector<AoFrame> run(const Params& p, double yaw_per_frame, int frames) {
+  TemporalChain chain(p);
+  std::vector<AoFrame> out;
+  for (int f = 1; f <= frames; ++f) {
+    const Scene s = groove(yaw_per_frame * (f - 1));
+    out.push_back(chain.process(s.g, s.cam, f, false));
+  }
+  return out;
+}
+
+TEST(RadianceCache, AStaticCameraComputesWhatItDoesWithoutTheCache) {
+  for (bool vectorised : {true, false}) {
+    Params p;
+    p.outputs = {"ao", "irradiance"};
+    p.unseen_radiance = 0.5;  // the fallback, through the marches' fill and the replay
+    p.bounces = 2;
+    p.vectorised = vectorised;
+    const std::vector<AoFrame> plain = run(p, 0, 4);
+    p.radiance_cache = 8;
+    const std::vector<AoFrame> cached = run(p, 0, 4);
+    for (size_t f = 0; f < plain.size(); ++f) {
+      SCOPED_TRACE(std::to_string(f) + (vectorised ? " simd" : " scalar"));
+      test::expect_same_bytes(plain[f].irradiance, cached[f].irradiance, "irradiance");
+      test::expect_same_bytes(plain[f].ao, cached[f].ao, "ao");
+    }
+  }
+}
+
+TEST(RadianceCache, APlaneAloneReceivesTheFillOfItsNormal) {
+  // A floor alone: the gather finds nothing in any direction, so every direction is unseen
+  // and a pixel's irradiance (E/π, cosine-weighted mean radiance) is its fill: with the
+  // cache's uniform sphere around the camera, F(n) of the table (fallback 0), in either
+  // march and with the in-frame bounces' replay.
+  const Camera cam = test::look_at(96, 54, 60, {0, -3, 1.5}, {0, 0, 0});
+  GBuffer g = test::ray_cast(cam, {{{0, 0, 0}, {0, 0, 1}, {0, 1, 0}, 1e9}});
+  g.diffcol.assign(g.pixels(), Vec3{0.5f, 0.5f, 0.5f});
+  g.diffdir.assign(g.pixels(), Vec3{0.3f, 0.3f, 0.3f});
+  RadianceCache cache(8);
+  add_sphere(cache, 1, 2.f);
+  const std::vector<Vec3> table = cache.fill_table(cam, 2, Vec3{});
+  for (bool vectorised : {true, false})
+    for (int bounces : {1, 2}) {
+      Params p;
+      p.outputs = {"ao", "irradiance"};
+      p.vectorised = vectorised;
+      p.bounces = bounces;
+      const Params r = resolve_frame_outputs(g, p);
+      const ViewGBuffer v = make_view_gbuffer(g, cam, r);
+      FrameInputs in;
+      in.frame = 2;
+      in.cache = &cache;
+      const HorizonImage h = search_frame(v, g, cam, r, in);
+      size_t n = 0;
+      for (size_t i = 0; i < v.pixels(); ++i) {
+        if (v.is_background(i)) continue;
+        const Vec3 f = RadianceCache::lookup(table, v.normal[i]);
+        ASSERT_GT(f.x, 0.5f);
+        // To the slices' quadrature of the hemisphere (16 directions a pixel): within 4 %.
+        EXPECT_NEAR(h.irradiance[i].x / f.x, 1.0, 0.04) << i << " " << vectorised;
+        ++n;
+      }
+      EXPECT_GT(n, v.pixels() / 3);
+    }
+}
+
+}  // namespace
+}  // namespace hbil
