@@ -459,6 +459,30 @@ TEST_F(Cli, MissingPassFailsWithoutOutput) {
                  {"hbil: error: ", "frame 2", in_frame(2), "ViewLayer.Normal.X"}, {});
 }
 
+// A frame's own render stands in for its panorama (it has Position, DiffCol, DiffDir, Emit):
+// what it shows, also beyond the gather's reach, lights the empty directions, so indirect
+// light grows; a panorama without Position is a missing pass naming its file.
+TEST_F(Cli, PanoramaLightsTheEmptyDirectionsAndNeedsItsPasses) {
+  copy_frame(1);
+  const std::string set = "--set 'outputs=[\"indirect\"]' --no-display ";
+  ASSERT_EQ(hbil(run_args(in_frame(1), path("out/a.exr"), set)).code, 0);
+  const RunResult r = hbil(run_args(in_frame(1), path("out/b.exr"),
+                                    set + "--set panorama=" + q(path("in/frame_####.exr"))));
+  ASSERT_EQ(r.code, 0) << r.err;
+  const Pixels a = test::read_pixels(path("out/a.exr")), b = test::read_pixels(path("out/b.exr"));
+  const int c = a.channel("indirect.G");
+  ASSERT_GE(c, 0);
+  double sa = 0, sb = 0;
+  for (int y = 0; y < a.spec.height; ++y)
+    for (int x = 0; x < a.spec.width; ++x) sa += a.at(x, y, c), sb += b.at(x, y, c);
+  EXPECT_GT(sb, sa * 1.05);
+  test::copy_exr(sample(1), path("in/pano_0001.exr"), {"ViewLayer.Position."});
+  expect_failure(run_args(in_frame(1), path("out/c.exr"),
+                          set + "--set panorama=" + q(path("in/pano_####.exr"))),
+                 Exit::missing_pass,
+                 {"frame 1", path("in/pano_0001.exr"), "panorama", "ViewLayer.Position.X"}, {});
+}
+
 TEST_F(Cli, NonFiniteDepthFailsKeepingTheFramesBefore) {
   copy_frame(1);
   test::copy_exr(sample(2), in_frame(2), {}, [](Pixels& p) {

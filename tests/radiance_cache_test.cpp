@@ -73,6 +73,67 @@ TEST(RadianceCache, ACacheThatKnowsEverySideGivesItsRadianceBehindTheCamera) {
   EXPECT_LT(ahead.x, back.x);
 }
 
+// A panorama of 64 x 32 pixels, equirectangular about world z, around a camera at the origin:
+// a sphere of radius 4 with DiffCol rho and DiffDir D, its top half open (background) when
+// `open_top`.
+GBuffer panorama(float rho, float D, bool open_top) {
+  GBuffer g;
+  g.width = 64;
+  g.height = 32;
+  g.depth.assign(g.pixels(), 4.f);
+  g.position.resize(g.pixels());
+  g.diffcol.assign(g.pixels(), Vec3{rho, rho, rho});
+  g.diffdir.assign(g.pixels(), Vec3{D, D, D});
+  for (int y = 0; y < g.height; ++y)
+    for (int x = 0; x < g.width; ++x) {
+      const double theta = (y + 0.5) / g.height * kPi, phi = (x + 0.5) / g.width * 2 * kPi;
+      const size_t i = size_t(y) * g.width + x;
+      g.position[i] = Vec3(
+          Vec3d{std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta)} *
+          4.0);
+      if (open_top && y < g.height / 2) g.depth[i] = 1e10f;
+    }
+  return g;
+}
+
+TEST(RadianceCache, PanoramaAmbientIsTheEnclosuresEndlessBounces) {
+  // Closed: mean direct 0.5 x 0.2 = 0.1 over the sphere, mean albedo 0.5: 0.1 / (1 - 0.5).
+  EXPECT_NEAR(RadianceCache::panorama_ambient(panorama(0.5f, 0.2f, false), 1e9f).x, 0.2, 1e-5);
+  // Half of the sphere open: both means halve, 0.05 / (1 - 0.25).
+  EXPECT_NEAR(RadianceCache::panorama_ambient(panorama(0.5f, 0.2f, true), 1e9f).x, 0.05 / 0.75,
+              1e-5);
+  // Albedo 1 is held at kMaxAmbientAlbedo: finite.
+  EXPECT_NEAR(RadianceCache::panorama_ambient(panorama(1.f, 0.2f, false), 1e9f).x,
+              0.2 / (1 - RadianceCache::kMaxAmbientAlbedo), 1e-4);
+}
+
+TEST(RadianceCache, APanoramaLightsEveryNormalWithWhatItSees) {
+  RadianceCache cache(1);
+  EXPECT_TRUE(cache.empty());
+  cache.set_panorama(panorama(0.5f, 0.2f, false), 1e9f, 7);
+  EXPECT_FALSE(cache.empty());
+  const Camera cam = reader();
+  // Every direction, on screen too, holds L = rho (D + ambient) = 0.5 (0.2 + 0.2): each
+  // normal's fill is L A / (A + ε) with A = π.
+  const std::vector<Vec3> table = cache.fill_table(cam, 7, Vec3{});
+  for (const Vec3& n : {Vec3{0, 0, 1}, Vec3{0, 0, -1}, Vec3{1, 0, 0}, Vec3{0, -1, 0}}) {
+    const Vec3 f = RadianceCache::lookup(table, n);
+    EXPECT_NEAR(f.x, 0.2 / (1 + RadianceCache::kEpsilon), 0.006) << n.x << n.y << n.z;
+  }
+  // Another frame does not read it; clear() (a cut) keeps it.
+  EXPECT_FLOAT_EQ(RadianceCache::lookup(cache.fill_table(cam, 8, Vec3{1, 1, 1}), Vec3{0, 0, 1}).x,
+                  1.f);
+  cache.clear();
+  EXPECT_NEAR(RadianceCache::lookup(cache.fill_table(cam, 7, Vec3{}), Vec3{0, 0, 1}).x,
+              0.2 / (1 + RadianceCache::kEpsilon), 0.006);
+  // Its open top half is unknown: it takes the fallback. An upward normal (view -y; the
+  // reader looks along +y with z up) sees the open half only.
+  cache.set_panorama(panorama(0.5f, 0.2f, true), 1e9f, 7);
+  const Vec3 up =
+      RadianceCache::lookup(cache.fill_table(cam, 7, Vec3{0.3f, 0.3f, 0.3f}), Vec3{0, -1, 0});
+  EXPECT_NEAR(up.x, 0.3, 0.02);
+}
+
 TEST(RadianceCache, FramesOutsideItsWindowAreNotRead) {
   RadianceCache cache(8);
   add_sphere(cache, 3, 2.f);

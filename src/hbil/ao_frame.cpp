@@ -38,8 +38,8 @@ Vec3 diffuse_weight(const GBuffer& g, size_t i) {
 }
 
 AoFrame compute_ao_frame(const GBuffer& g, const Camera& cam, const Params& p,
-                         const SH9* environment) {
-  return compute_ao_frame(make_view_gbuffer(g, cam, p), g, cam, p, environment);
+                         const SH9* environment, const RadianceCache* cache, int frame) {
+  return compute_ao_frame(make_view_gbuffer(g, cam, p), g, cam, p, environment, cache, frame);
 }
 
 Params resolve_frame_outputs(const GBuffer& g, const Params& requested) {
@@ -53,9 +53,13 @@ bool gathers(const Params& p) {
 }
 
 AoFrame compute_ao_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& cam,
-                         const Params& requested, const SH9* environment) {
+                         const Params& requested, const SH9* environment,
+                         const RadianceCache* cache, int frame) {
   const Params p = resolve_frame_outputs(g, requested);
-  return assemble_frame(v, g, cam, p, search_frame(v, g, cam, p, FrameInputs{}), environment);
+  FrameInputs in;
+  in.cache = cache;
+  in.frame = frame;
+  return assemble_frame(v, g, cam, p, search_frame(v, g, cam, p, std::move(in)), environment);
 }
 
 Vec3 mean_direct_radiance(const ViewGBuffer& v, const GBuffer& g) {

@@ -43,8 +43,10 @@ Vec3 diffuse_weight(const GBuffer& g, size_t i);
 // Background pixels get ao = 1, bent = the input normal as stored (zero for Blender's
 // background) and cone_cos = 0 (a full hemisphere).
 // `environment` (SH of the far field, world space) is needed by the farfield output.
+// `cache`: what lies off screen (a panorama of frame `frame`; radiance_cache.h), or null.
 AoFrame compute_ao_frame(const GBuffer& g, const Camera& cam, const Params& p,
-                         const SH9* environment = nullptr);
+                         const SH9* environment = nullptr, const RadianceCache* cache = nullptr,
+                         int frame = 0);
 
 // The two halves of compute_ao_frame, for the temporal chain (temporal.h), which blends the
 // search's result with its history in between. `p` has its outputs resolved
@@ -84,6 +86,7 @@ AoFrame assemble_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& cam
 // The same from an already prepared view-space G-buffer (used by tests and benchmarks).
 // `g` supplies the world normals and, for irradiance, the colour fields.
 AoFrame compute_ao_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& cam, const Params& p,
-                         const SH9* environment = nullptr);
+                         const SH9* environment = nullptr, const RadianceCache* cache = nullptr,
+                         int frame = 0);
 
 }  // namespace hbil

@@ -199,6 +199,7 @@ json to_json(const Params& p) {
   j["method"] = p.method;
   j["reprojection"] = p.reprojection;
   j["environment"] = p.environment;
+  j["panorama"] = p.panorama;
   j["view_layer"] = p.view_layer;
   j["input_space"] = p.input_space;
   j["passes"] = p.passes;
@@ -279,6 +280,10 @@ Params params_from_json(const json& j, const std::string& where, Params p) {
       if (!v.is_string())
         fail(where, "key 'environment' must be a file name or \"rgb:r,g,b\", got " + v.dump());
       p.environment = v.get<std::string>();
+    } else if (key == "panorama") {
+      if (!v.is_string())
+        fail(where, "key 'panorama' must be a frame pattern of EXR files, got " + v.dump());
+      p.panorama = v.get<std::string>();
     } else if (key == "view_layer") {
       if (!v.is_string()) fail(where, "key 'view_layer' must be a string, got " + v.dump());
       p.view_layer = v.get<std::string>();
@@ -320,8 +325,8 @@ Params params_from_json(const json& j, const std::string& where, Params p) {
     } else {
       std::vector<std::string> keys;
       for (const auto& i : params_table()) keys.push_back(i.key);
-      keys.insert(keys.end(), {"method", "reprojection", "environment", "view_layer", "input_space",
-                               "passes", "outputs", "compression", "tuned"});
+      keys.insert(keys.end(), {"method", "reprojection", "environment", "panorama", "view_layer",
+                               "input_space", "passes", "outputs", "compression", "tuned"});
       fail(where, "unknown key '" + key + "' (known: " + allowed_list(keys) + ")");
     }
   }

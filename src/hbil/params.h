@@ -58,7 +58,11 @@ struct Params {
   // outgoing radiance (ao_frame.h).
   double unseen_radiance = 0.0;
   bool unseen_radiance_auto = false;
-  std::string environment;      // far field: "" (off), equirect EXR path, or "rgb:r,g,b"
+  std::string environment;  // far field: "" (off), equirect EXR path, or "rgb:r,g,b"
+  // A frame pattern of panoramic G-buffers from each frame's camera position (Position,
+  // DiffCol, DiffDir, Emit, Depth), whose off-screen part lights the gather's empty
+  // directions (radiance_cache.h); "" (off).
+  std::string panorama;
   bool ao_multibounce = false;  // ao as RGB with the multi-bounce fit (improved-AO eq. 12)
 
   // --- Temporal chain (HBIL §2.3.1 eq. 17, §3.2, §3.3): across the frames of one run ---

@@ -58,20 +58,70 @@ void RadianceCache::add(const ViewGBuffer& v, const Camera& cam, const GBuffer& 
     }
 }
 
+Vec3 RadianceCache::panorama_ambient(const GBuffer& pano, float background) {
+  // Solid-angle weighted means over the whole sphere (rows of an equirectangular image
+  // weigh sin θ); the background counts with no albedo and no radiance.
+  Vec3d direct{0, 0, 0}, albedo{0, 0, 0};
+  double all = 0;
+  for (int y = 0; y < pano.height; ++y) {
+    const double w = std::sin((y + 0.5) * kPi / pano.height);
+    for (int x = 0; x < pano.width; ++x) {
+      const size_t i = size_t(y) * pano.width + x;
+      all += w;
+      if (!(pano.depth[i] < background)) continue;
+      const Vec3 &a = pano.diffcol[i], e = pano.diffdir[i];
+      Vec3 l{a.x * e.x, a.y * e.y, a.z * e.z};
+      if (!pano.emit.empty()) l += pano.emit[i];
+      direct = direct + Vec3d(l) * w;
+      albedo = albedo + Vec3d(a) * w;
+    }
+  }
+  if (!(all > 0)) return {};
+  auto channel = [&](double d, double a) {
+    return float(d / all / (1 - std::clamp(a / all, 0.0, kMaxAmbientAlbedo)));
+  };
+  return {channel(direct.x, albedo.x), channel(direct.y, albedo.y), channel(direct.z, albedo.z)};
+}
+
+void RadianceCache::set_panorama(const GBuffer& pano, float background, int frame) {
+  panorama_.clear();
+  const Vec3 ambient = panorama_ambient(pano, background);
+  const int s = std::max(1, (pano.width + kPanoramaColumns - 1) / kPanoramaColumns);
+  for (int y = s / 2; y < pano.height; y += s)
+    for (int x = s / 2; x < pano.width; x += s) {
+      const size_t i = size_t(y) * pano.width + x;
+      if (!(pano.depth[i] < background)) continue;
+      const Vec3 &a = pano.diffcol[i], e = pano.diffdir[i] + ambient;
+      Vec3 l{a.x * e.x, a.y * e.y, a.z * e.z};
+      if (!pano.emit.empty()) l += pano.emit[i];
+      if (!(std::isfinite(l.x) && std::isfinite(l.y) && std::isfinite(l.z))) continue;
+      panorama_.push_back({pano.position[i], l, frame, false});
+    }
+}
+
 std::vector<Vec3> RadianceCache::fill_table(const Camera& cam, int frame, Vec3 fallback) const {
   constexpr int W = kProbeWidth, H = kProbeHeight, n_tex = W * H;
   // 1. The probe: nearest distance per texel, then the mean of the entries within the band.
+  // The frames' entries, then the panorama's.
+  const size_t n = entries_.size() + panorama_.size();
+  auto entry = [&](size_t k) -> const Entry& {
+    return k < entries_.size() ? entries_[k] : panorama_[k - entries_.size()];
+  };
   std::vector<float> nearest(n_tex, HUGE_VALF);
-  std::vector<int> texel(entries_.size(), -1);
-  std::vector<float> dist(entries_.size(), HUGE_VALF);
+  std::vector<int> texel(n, -1);
+  std::vector<float> dist(n, HUGE_VALF);
   std::vector<unsigned char> sky(n_tex, 0);
-  for (size_t k = 0; k < entries_.size(); ++k) {
-    const Entry& e = entries_[k];
-    if (e.frame >= frame || e.frame < frame - frames_) continue;
+  for (size_t k = 0; k < n; ++k) {
+    const Entry& e = entry(k);
+    const bool readable =
+        k < entries_.size() ? e.frame < frame && e.frame >= frame - frames_ : e.frame == frame;
+    if (!readable) continue;
     const Vec3d d = e.sky ? cam.world_dir_to_view(Vec3d(e.p)) : cam.world_to_view(Vec3d(e.p));
     const double len = std::sqrt(dot(d, d));
-    // What the frame shows now is searched on screen (and keeps a static camera's fill).
-    if (!(len > 0) || in_frustum(cam, d)) continue;
+    // What the frame shows now is searched on screen (and keeps a static camera's fill); the
+    // panorama also holds what lies beyond the gather's reach there.
+    const bool panorama = k >= entries_.size();
+    if (!(len > 0) || (!panorama && in_frustum(cam, d))) continue;
     double u, v;
     to_map(d, W, H, u, v);
     const int tx = std::clamp(int(u), 0, W - 1), ty = std::clamp(int(v), 0, H - 1);
@@ -85,17 +135,19 @@ std::vector<Vec3> RadianceCache::fill_table(const Camera& cam, int frame, Vec3 f
   }
   std::vector<Vec3> sum(n_tex);
   std::vector<int> count(n_tex, 0);
-  for (size_t k = 0; k < entries_.size(); ++k) {
+  std::vector<unsigned char> seen_by_panorama(n_tex, 0);
+  for (size_t k = 0; k < n; ++k) {
     const int t = texel[k];
-    if (t < 0 || entries_[k].sky || !(dist[k] <= nearest[t] * (1.f + kDepthBand))) continue;
-    sum[t] += entries_[k].L;
+    if (t < 0 || entry(k).sky || !(dist[k] <= nearest[t] * (1.f + kDepthBand))) continue;
+    sum[t] += entry(k).L;
+    seen_by_panorama[t] |= k >= entries_.size();
     ++count[t];
   }
   // Texel directions, solid angles and whether the frustum holds them.
   struct Texel {
     Vec3d d;
     double omega;
-    bool off_screen;
+    bool used;  // off screen, or on screen where the panorama has its surface
     int state;  // 0 unknown, 1 known
     Vec3 L;
   };
@@ -107,7 +159,7 @@ std::vector<Vec3> RadianceCache::fill_table(const Camera& cam, int frame, Vec3 f
       const int i = ty * W + tx;
       t.d = from_map(tx + 0.5, ty + 0.5, W, H);
       t.omega = omega;
-      t.off_screen = !in_frustum(cam, t.d);
+      t.used = !in_frustum(cam, t.d) || seen_by_panorama[i];
       t.state = count[i] > 0 || sky[i] ? 1 : 0;
       t.L = count[i] > 0 ? sum[i] * (1.f / float(count[i])) : Vec3{};
     }
@@ -121,7 +173,7 @@ std::vector<Vec3> RadianceCache::fill_table(const Camera& cam, int frame, Vec3 f
       Vec3d known{0, 0, 0};
       double unknown = 0, all = 0;
       for (const Texel& t : tex) {
-        if (!t.off_screen) continue;
+        if (!t.used) continue;
         const double c = dot(n, t.d);
         if (!(c > 0)) continue;
         const double w = c * t.omega;

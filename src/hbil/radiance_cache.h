@@ -38,6 +38,14 @@
 // like the far field's), and visibility between pixel and cached surface is not tested: the
 // gather only asks in the directions where its own search found nothing.
 //
+// A panoramic G-buffer of the frame (Params::panorama: Cycles' equirectangular camera at the
+// frame's camera position, direct light only) feeds the same probe (set_panorama): its
+// geometry pixels with their world position and DiffCol x (DiffDir + A) + Emit, A its
+// panorama_ambient, for that frame alone. Unlike the frames' entries, its entries and texels
+// inside the frustum count too: it knows what lies beyond gather_radius there. Its
+// background is left unknown, so it takes the fallback (0 by default: the sky's light is in
+// DiffDir). Then the first frame of a run and single frames have a fill too.
+//
 // With an empty cache (a run's first frame, the frame after a cut, single frames) and on a
 // static camera (nothing outside the frustum is known) the fill is the fallback everywhere:
 // the results are those without a cache.
@@ -75,9 +83,23 @@ class RadianceCache {
   // are dropped.
   void add(const ViewGBuffer& v, const Camera& cam, const GBuffer& g, const std::vector<Vec3>& E,
            int frame);
+  // Drops the frames' entries (a cut); the panorama stays.
   void clear() { entries_.clear(); }
   size_t size() const { return entries_.size(); }
-  bool empty() const { return entries_.empty(); }
+  bool empty() const { return entries_.empty() && panorama_.empty(); }
+
+  // Frame `frame`'s panorama (world-space positions, background at depth >= background):
+  // its geometry pixels on a grid of about kPanoramaColumns columns, read by that frame
+  // only; it replaces the one before. Needs position, depth, diffcol and diffdir.
+  static constexpr int kPanoramaColumns = 256;
+  void set_panorama(const GBuffer& pano, float background, int frame);
+  // The indirect radiance every panorama surface is taken to receive: the panorama's mean
+  // outgoing direct radiance over the whole sphere (solid-angle weighted, the background
+  // dark), divided by 1 - its mean albedo (at most kMaxAmbientAlbedo): the light of
+  // endless bounces in an enclosure that looks like the panorama everywhere (the "ambient
+  // term" of progressive radiosity), per channel.
+  static constexpr double kMaxAmbientAlbedo = 0.9;
+  static Vec3 panorama_ambient(const GBuffer& pano, float background);
 
   // The fill of frame `frame`'s searched view `v` (possibly reduced: only its normals and
   // background are read) with camera `cam` (the frame's full-resolution camera, for the
@@ -93,7 +115,7 @@ class RadianceCache {
 
  private:
   int frames_;
-  std::vector<Entry> entries_;
+  std::vector<Entry> entries_, panorama_;
 };
 
 }  // namespace hbil

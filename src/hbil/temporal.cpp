@@ -160,13 +160,14 @@ AoFrame TemporalChain::run(const GBuffer& g, GBuffer* release, const Camera& cam
   // The radiance cache holds the frames since the last cut (a cut may be another set).
   const bool cache = p_.radiance_cache > 0 && gathers(p_);
   if (cut || rep.first) cache_.clear();
+  const bool reads_cache = (cache || !p_.panorama.empty()) && gathers(p_);
 
   // Feedback: the history's irradiance, with its holes filled by push/pull.
   const bool gather = gathers(p_);
   FrameInputs in;
   in.rotate = true;
   in.frame = frame;
-  if (cache) in.cache = &cache_;
+  if (reads_cache) in.cache = &cache_;
   std::vector<Vec3>& feedback = in.feedback;
   if (history && gather && p_.feedback) {
     std::vector<float> e(3 * n_px), depth(n_px);

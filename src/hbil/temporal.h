@@ -76,6 +76,10 @@ class TemporalChain {
                   const SH9* environment = nullptr, TemporalReport* report = nullptr);
 
   void reset() { has_history_ = false; }
+  // The panorama of the frame processed next (Params::panorama; RadianceCache::set_panorama).
+  void set_panorama(const GBuffer& pano, int frame) {
+    cache_.set_panorama(pano, float(p_.background_depth), frame);
+  }
 
   // Per-pixel history channels: irradiance (3), ao, vis, bent vector in world space (3), n;
   // with history_window, two such groups (the chains) and the frame's own irradiance (3).

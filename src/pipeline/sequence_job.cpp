@@ -10,12 +10,32 @@
 #include <sstream>
 
 #include "hbil/error.h"
+#include "hbil/radiance_cache.h"
 #include "hbil/scene_scale.h"
 #include "io/environment.h"
+#include "io/exr_frame.h"
+#include "io/sequence.h"
 
 namespace hbil::pipeline {
 
 namespace {
+
+// Frame `frame` of Params::panorama: the fields RadianceCache::set_panorama reads, with the
+// same pass names as the frames (Exit::missing_pass naming the file and the channels looked
+// for when one is absent).
+GBuffer read_panorama(const std::string& path, int frame, const Params& p) {
+  const io::InputFrame in = io::open_frame(path, frame, p);
+  std::vector<std::string> fields = {"position", "depth", "diffcol", "diffdir"};
+  for (const std::string& f : fields)
+    if (!in.has(f)) {
+      std::string looked;
+      for (const std::string& c : in.wanted.at(f)) looked += (looked.empty() ? "" : ", ") + c;
+      throw Error(Exit::missing_pass,
+                  in.where() + ": the panorama has no " + f + " pass (" + looked + ")");
+    }
+  if (in.has("emit")) fields.push_back("emit");
+  return io::read_fields(in, fields, p);
+}
 
 using Clock = std::chrono::steady_clock;
 
@@ -153,6 +173,7 @@ void SequenceJob::run(const Hooks& hooks, Overlap overlap_mode, const SH9* given
     GBuffer g;
     Camera cam;
     ZeroNormals zero;
+    GBuffer pano;  // Params::panorama's frame, or empty
     double read_ms = 0, camera_ms = 0;
   };
   auto load = [this](int frame) {
@@ -162,6 +183,8 @@ void SequenceJob::run(const Hooks& hooks, Overlap overlap_mode, const SH9* given
     // Colour fields stored as half stay half until the frame's geometry is done with.
     l.g = io::read_fields(l.in, io::fields_needed(l.in, p_), p_, true);
     l.zero = find_zero_normals(l.g, p_);
+    if (!p_.panorama.empty())
+      l.pano = read_panorama(io::FramePattern(p_.panorama).path(frame), frame, p_);
     const auto t_read = Clock::now();
     l.cam = io::find_camera(l.in, l.g, p_);
     l.read_ms = ms(t0, t_read);
@@ -247,10 +270,21 @@ void SequenceJob::run(const Hooks& hooks, Overlap overlap_mode, const SH9* given
       }
       const auto t_compute = Clock::now();
       TemporalReport rep;
+      std::optional<RadianceCache> pano;
+      if (cur.pano.pixels() > 0) {
+        if (chain) {
+          chain->set_panorama(cur.pano, frame);
+        } else {
+          pano.emplace(1);
+          pano->set_panorama(cur.pano, float(p_.background_depth), frame);
+        }
+        cur.pano = GBuffer{};
+      }
       AoFrame result =
           chain ? chain->process(std::move(cur.g), cur.cam, frame,
                                  plan_.cuts.count(frame) > 0 || !gap.empty(), environment, &rep)
-                : (cur.g.unpack(), compute_ao_frame(cur.g, cur.cam, p_, environment));
+                : (cur.g.unpack(), compute_ao_frame(cur.g, cur.cam, p_, environment,
+                                                    pano ? &*pano : nullptr, frame));
       if (!gap.empty() && rep.cut) rep.cut_reason = gap;
       const double compute_ms = ms(t_compute, Clock::now());
       if (!overlap && preroll) read_next();
