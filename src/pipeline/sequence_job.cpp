@@ -183,7 +183,7 @@ void SequenceJob::run(const Hooks& hooks, Overlap overlap_mode, const SH9* given
     // Colour fields stored as half stay half until the frame's geometry is done with.
     l.g = io::read_fields(l.in, io::fields_needed(l.in, p_), p_, true);
     l.zero = find_zero_normals(l.g, p_);
-    if (!p_.panorama.empty())
+    if (!p_.panorama.empty() && gathers(p_))  // only the gather reads it
       l.pano = read_panorama(io::FramePattern(p_.panorama).path(frame), frame, p_);
     const auto t_read = Clock::now();
     l.cam = io::find_camera(l.in, l.g, p_);
