@@ -1,7 +1,7 @@
 """Render a panoramic G-buffer of the open Blender scene for hbil's radiance cache.
 
     blender -b shot.blend --python samples/blender/panorama.py -- \
-        --out DIR [--size 256x128] [--samples 16] [--frames 1-8]
+        --out DIR [--size 128x64] [--samples 4] [--frames 1-8]
 
 For each frame, an equirectangular view from the scene camera's position (Cycles' panoramic
 camera, the whole sphere) is rendered to DIR/pano_####.exr with the passes hbil's
@@ -27,8 +27,8 @@ def main():
     argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
     p = argparse.ArgumentParser()
     p.add_argument("--out", required=True)
-    p.add_argument("--size", default="256x128", help="WxH of the equirectangular image")
-    p.add_argument("--samples", type=int, default=16)
+    p.add_argument("--size", default="128x64", help="WxH of the equirectangular image")
+    p.add_argument("--samples", type=int, default=4)
     p.add_argument("--frames", default=None, help="A-B (default: the scene's range)")
     a = p.parse_args(argv)
     w, h = (int(v) for v in a.size.lower().split("x"))
