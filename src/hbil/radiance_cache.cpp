@@ -31,6 +31,15 @@ bool in_frustum(const Camera& cam, const Vec3d& d) {
   return u >= 0 && u <= cam.width && v >= 0 && v <= cam.height;
 }
 
+// g's outgoing diffuse radiance at pixel i with irradiance / π `e` there:
+// DiffCol x e + Emit.
+Vec3 outgoing(const GBuffer& g, size_t i, const Vec3& e) {
+  const Vec3& a = g.diffcol[i];
+  Vec3 l{a.x * e.x, a.y * e.y, a.z * e.z};
+  if (!g.emit.empty()) l += g.emit[i];
+  return l;
+}
+
 }  // namespace
 
 void RadianceCache::add(const ViewGBuffer& v, const Camera& cam, const GBuffer& g,
@@ -49,9 +58,7 @@ void RadianceCache::add(const ViewGBuffer& v, const Camera& cam, const GBuffer& 
         entries_.push_back(
             {Vec3(normalize_or_zero(cam.view_dir_to_world(ray))), Vec3{}, frame, true});
       } else {
-        const Vec3 &a = g.diffcol[i], e = g.diffdir[i] + E[i];
-        Vec3 l{a.x * e.x, a.y * e.y, a.z * e.z};
-        if (!g.emit.empty()) l += g.emit[i];
+        const Vec3 l = outgoing(g, i, g.diffdir[i] + E[i]);
         if (!(std::isfinite(l.x) && std::isfinite(l.y) && std::isfinite(l.z))) continue;
         entries_.push_back({Vec3(cam.view_to_world(Vec3d(v.position[i]))), l, frame, false});
       }
@@ -69,11 +76,8 @@ Vec3 RadianceCache::panorama_ambient(const GBuffer& pano, float background) {
       const size_t i = size_t(y) * pano.width + x;
       all += w;
       if (!(pano.depth[i] < background)) continue;
-      const Vec3 &a = pano.diffcol[i], e = pano.diffdir[i];
-      Vec3 l{a.x * e.x, a.y * e.y, a.z * e.z};
-      if (!pano.emit.empty()) l += pano.emit[i];
-      direct = direct + Vec3d(l) * w;
-      albedo = albedo + Vec3d(a) * w;
+      direct = direct + Vec3d(outgoing(pano, i, pano.diffdir[i])) * w;
+      albedo = albedo + Vec3d(pano.diffcol[i]) * w;
     }
   }
   if (!(all > 0)) return {};
@@ -91,9 +95,7 @@ void RadianceCache::set_panorama(const GBuffer& pano, float background, int fram
     for (int x = s / 2; x < pano.width; x += s) {
       const size_t i = size_t(y) * pano.width + x;
       if (!(pano.depth[i] < background)) continue;
-      const Vec3 &a = pano.diffcol[i], e = pano.diffdir[i] + ambient;
-      Vec3 l{a.x * e.x, a.y * e.y, a.z * e.z};
-      if (!pano.emit.empty()) l += pano.emit[i];
+      const Vec3 l = outgoing(pano, i, pano.diffdir[i] + ambient);
       if (!(std::isfinite(l.x) && std::isfinite(l.y) && std::isfinite(l.z))) continue;
       panorama_.push_back({pano.position[i], l, frame, false});
     }
