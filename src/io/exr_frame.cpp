@@ -167,6 +167,16 @@ Params resolve_outputs(const InputFrame& f, const Params& p, std::string* why_dr
   });
 }
 
+void require_fields(const InputFrame& f, const std::vector<std::string>& fields,
+                    const std::string& needed_by) {
+  for (const std::string& field : fields)
+    if (!f.has(field))
+      throw Error(Exit::missing_pass, f.where() + ": missing pass: " + field +
+                                          " (looked for channels " + join(f.wanted.at(field)) +
+                                          "; needed by " + needed_by + "; map it with passes." +
+                                          field + ")");
+}
+
 std::vector<std::string> fields_needed(const InputFrame& f, const Params& requested) {
   const Params p = requested.wants("auto") ? resolve_outputs(f, requested) : requested;
   std::vector<std::string> need;
@@ -198,13 +208,7 @@ std::vector<std::string> fields_needed(const InputFrame& f, const Params& reques
   }
   if (p.wants("irradiance") || p.wants("indirect") || p.wants("composite")) {
     // Source radiance DiffCol × DiffDir + Emit (HBIL eq. 16-17); Emit is optional.
-    for (const char* field : {"diffcol", "diffdir"})
-      if (!f.has(field))
-        throw Error(Exit::missing_pass,
-                    f.where() + ": missing pass: " + field + " (looked for channels " +
-                        join(f.wanted.at(field)) +
-                        "; needed by irradiance, indirect and composite; map it with passes." +
-                        field + ")");
+    require_fields(f, {"diffcol", "diffdir"}, "irradiance, indirect and composite");
     need.insert(need.end(), {"diffcol", "diffdir"});
     if (f.has("emit")) need.push_back("emit");
   }

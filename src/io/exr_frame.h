@@ -49,6 +49,10 @@ InputFrame open_frame(const std::string& path, int frame, const Params& p);
 // Error(Exit::missing_pass) naming the channels looked for.
 std::vector<std::string> fields_needed(const InputFrame& f, const Params& p);
 
+// Throws Error(Exit::missing_pass) for the first of `fields` the frame lacks, naming the
+// channels looked for and `needed_by` ("irradiance, indirect and composite", "panorama").
+void require_fields(const InputFrame& f, const std::vector<std::string>& fields,
+                    const std::string& needed_by);
 // `p` with outputs "auto" resolved against what this frame holds: ao and bentcone, and each
 // of irradiance, indirect and composite whose passes are present. `why_dropped` receives
 // the missing-pass message of the first auto output left out ("" when none was).

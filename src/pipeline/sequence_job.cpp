@@ -26,13 +26,7 @@ namespace {
 GBuffer read_panorama(const std::string& path, int frame, const Params& p) {
   const io::InputFrame in = io::open_frame(path, frame, p);
   std::vector<std::string> fields = {"position", "depth", "diffcol", "diffdir"};
-  for (const std::string& f : fields)
-    if (!in.has(f)) {
-      std::string looked;
-      for (const std::string& c : in.wanted.at(f)) looked += (looked.empty() ? "" : ", ") + c;
-      throw Error(Exit::missing_pass,
-                  in.where() + ": the panorama has no " + f + " pass (" + looked + ")");
-    }
+  io::require_fields(in, fields, "panorama");
   if (in.has("emit")) fields.push_back("emit");
   return io::read_fields(in, fields, p);
 }
