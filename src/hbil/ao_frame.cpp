@@ -123,14 +123,13 @@ HorizonImage search_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& 
   HorizonImage h;
   // unseen_radiance "auto": a fraction of the frame's mean direct outgoing radiance
   // (params.h), the same for every bounce.
-  const Vec3 unseen_auto =
-      gather && p.unseen_radiance_auto ? mean_direct_radiance(v, g) * kAutoUnseen : Vec3{};
+  const float u = float(p.unseen_radiance);
+  if (gather)
+    c.fill = p.unseen_radiance_auto ? mean_direct_radiance(v, g) * kAutoUnseen : Vec3{u, u, u};
   // The radiance cache's fill per searched pixel, with unseen_radiance where it knows nothing.
   std::vector<Vec3> fill_map;
   if (gather && in.cache && !in.cache->empty()) {
-    const float u = float(p.unseen_radiance);
-    fill_map =
-        in.cache->fill_map(sv, cam, in.frame, p.unseen_radiance_auto ? unseen_auto : Vec3{u, u, u});
+    fill_map = in.cache->fill_map(sv, cam, in.frame, c.fill);
     c.fill_map = fill_map.data();
   }
   const bool fresnel = !g.f0.empty() || !g.metallic.empty();
@@ -140,8 +139,6 @@ HorizonImage search_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& 
       L = source_radiance(g, bounce == 0 ? in.feedback : h.irradiance);
       std::vector<Vec3>().swap(in.feedback);
       h = HorizonImage{};
-      const float u = float(p.unseen_radiance);
-      c.fill = p.unseen_radiance_auto ? unseen_auto : Vec3{u, u, u};
     }
     h = search(gather ? &L : nullptr);
     if (fresnel)

@@ -157,13 +157,13 @@ AoFrame TemporalChain::run(const GBuffer& g, GBuffer* release, const Camera& cam
   std::vector<float>().swap(data_);
   view_ = ViewGBuffer{};
   if (!history) r = Reprojected{};
+  const bool gather = gathers(p_);
   // The radiance cache holds the frames since the last cut (a cut may be another set).
-  const bool cache = p_.radiance_cache > 0 && gathers(p_);
+  const bool cache = p_.radiance_cache > 0 && gather;
   if (cut || rep.first) cache_.clear();
-  const bool reads_cache = (cache || !p_.panorama.empty()) && gathers(p_);
+  const bool reads_cache = (cache || !p_.panorama.empty()) && gather;
 
   // Feedback: the history's irradiance, with its holes filled by push/pull.
-  const bool gather = gathers(p_);
   FrameInputs in;
   in.rotate = true;
   in.frame = frame;
