@@ -1,19 +1,27 @@
-// large_pages.cpp: the operator new of hbil and of its tests and benchmark, which asks the
-// kernel for transparent huge pages (2 MiB) for every block of at least 4 MiB: a frame's
-// planes (8 to 75 MB at 1920x1080) are allocated afresh every frame, and each of their 4 KiB
-// pages costs a page fault on first touch (a third of the system time of a 1920x1080 run,
-// where the kernel's default is to give huge pages only to memory that asks for them). What
-// glibc's tunable glibc.malloc.hugetlb=1 does for every block, done here for the large ones,
-// from inside the program. The blocks still come from malloc and go back through free: only
-// the pages under them change.
+// large_pages.cpp: the operator new of hbil and of its tests and benchmark, for the large
+// blocks a frame allocates and frees: its planes, 1 to 75 MB each at 1920x1080, made afresh
+// every frame. Fresh memory costs a page fault and a page cleared by the kernel for every
+// page on first touch: a third of the system time of a 1920x1080 run. So, for every block of
+// at least 1 MiB (kLarge):
+//  - huge pages: the kernel here gives transparent huge pages (2 MiB) only to memory that
+//    asks for them, and 4 KiB pages cost 512 times the faults. The whole huge pages inside
+//    the block are asked for (what glibc's tunable glibc.malloc.hugetlb=1 does for every
+//    block, done here for the large ones).
+//  - reuse: a freed block is kept, up to kCacheBytes in all, and handed to the next request
+//    that it fits within an eighth, so that the next frame's planes are the last frame's
+//    memory, neither faulted nor cleared again. The oldest blocks go first when it is full.
+// The blocks still come from malloc and go back through free; what a program sees of new and
+// delete is unchanged (new memory is not cleared, as before).
 //
 // Not under AddressSanitizer, which has its own operator new and would see our blocks come
 // from malloc and go to its operator delete.
+#include <malloc.h>
 #include <sys/mman.h>
 
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
+#include <mutex>
 #include <new>
 
 #if defined(__SANITIZE_ADDRESS__)
@@ -31,7 +39,55 @@
 namespace {
 
 constexpr std::size_t kHugePage = std::size_t(2) << 20;
-constexpr std::size_t kLarge = 2 * kHugePage;
+constexpr std::size_t kLarge = std::size_t(1) << 20;
+// What the cache may hold: about ten 1920x1080 planes of three floats. It adds at most this
+// to a run's peak memory, and only while blocks of sizes not asked for again sit in it.
+constexpr std::size_t kCacheBytes = std::size_t(256) << 20;
+constexpr int kSlots = 32;
+
+struct Block {
+  void* p;
+  std::size_t size;  // malloc_usable_size
+};
+// Constant-initialised and never destroyed, so that a delete during the program's exit
+// finds it whole (std::mutex is trivially destructible with glibc).
+struct Cache {
+  std::mutex m;
+  Block blocks[kSlots] = {};  // oldest first
+  int n = 0;
+  std::size_t bytes = 0;
+
+  void remove(int k) {
+    bytes -= blocks[k].size;
+    for (int i = k + 1; i < n; ++i) blocks[i - 1] = blocks[i];
+    --n;
+  }
+  // The smallest cached block of at least n bytes and at most n + n/8, taken out; or null.
+  void* take(std::size_t want) {
+    std::lock_guard<std::mutex> lock(m);
+    int best = -1;
+    for (int k = 0; k < n; ++k)
+      if (blocks[k].size >= want && blocks[k].size - want <= want / 8 &&
+          (best < 0 || blocks[k].size < blocks[best].size))
+        best = k;
+    if (best < 0) return nullptr;
+    void* p = blocks[best].p;
+    remove(best);
+    return p;
+  }
+  // Keeps p (usable size `size`), freeing the oldest blocks to make room.
+  void give(void* p, std::size_t size) {
+    if (size > kCacheBytes) return std::free(p);
+    std::lock_guard<std::mutex> lock(m);
+    while (n > 0 && (n == kSlots || bytes + size > kCacheBytes)) {
+      std::free(blocks[0].p);
+      remove(0);
+    }
+    blocks[n++] = {p, size};
+    bytes += size;
+  }
+};
+constinit Cache cache;
 
 void advise_huge_pages(void* p, std::size_t n) {
   // The whole huge pages inside the block; a madvise that fails changes nothing.
@@ -43,6 +99,8 @@ void advise_huge_pages(void* p, std::size_t n) {
 
 void* allocate(std::size_t n) {
   if (n == 0) n = 1;
+  if (n >= kLarge)
+    if (void* p = cache.take(n)) return p;
   for (;;) {
     if (void* p = std::malloc(n)) {
       if (n >= kLarge) advise_huge_pages(p, n);
@@ -54,6 +112,13 @@ void* allocate(std::size_t n) {
   }
 }
 
+void release(void* p) {
+  if (!p) return;
+  const std::size_t size = malloc_usable_size(p);
+  if (size >= kLarge) return cache.give(p, size);
+  std::free(p);
+}
+
 }  // namespace
 
 void* operator new(std::size_t n) {
@@ -63,15 +128,15 @@ void* operator new[](std::size_t n) {
   return allocate(n);
 }
 void operator delete(void* p) noexcept {
-  std::free(p);
+  release(p);
 }
 void operator delete[](void* p) noexcept {
-  std::free(p);
+  release(p);
 }
 void operator delete(void* p, std::size_t) noexcept {
-  std::free(p);
+  release(p);
 }
 void operator delete[](void* p, std::size_t) noexcept {
-  std::free(p);
+  release(p);
 }
 #endif
