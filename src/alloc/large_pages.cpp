@@ -10,11 +10,16 @@
 //  - reuse: a freed block is kept, up to kCacheBytes in all, and handed to the next request
 //    that it fits within an eighth, so that the next frame's planes are the last frame's
 //    memory, neither faulted nor cleared again. The oldest blocks go first when it is full.
+//    A request that no block fits first frees at least its own size of cached blocks, the
+//    oldest first (or all of them). So live and cached memory together grow only when the
+//    cache is empty, and then only to what is live: the peak is the one without a cache.
 // The blocks still come from malloc and go back through free; what a program sees of new and
 // delete is unchanged (new memory is not cleared, as before).
 //
 // Not under AddressSanitizer, which has its own operator new and would see our blocks come
 // from malloc and go to its operator delete.
+#include "alloc/large_pages.h"
+
 #include <malloc.h>
 #include <sys/mman.h>
 
@@ -62,7 +67,10 @@ struct Cache {
     for (int i = k + 1; i < n; ++i) blocks[i - 1] = blocks[i];
     --n;
   }
-  // The smallest cached block of at least n bytes and at most n + n/8, taken out; or null.
+  // The smallest cached block of at least `want` bytes and at most want + want/8, taken out.
+  // Where none fits, the oldest blocks are freed until they make up `want` (or none is
+  // left), so that the memory the caller then gets from malloc replaces cached memory
+  // instead of adding to it: the cache never raises a program's peak (see above).
   void* take(std::size_t want) {
     std::lock_guard<std::mutex> lock(m);
     int best = -1;
@@ -70,10 +78,17 @@ struct Cache {
       if (blocks[k].size >= want && blocks[k].size - want <= want / 8 &&
           (best < 0 || blocks[k].size < blocks[best].size))
         best = k;
-    if (best < 0) return nullptr;
-    void* p = blocks[best].p;
-    remove(best);
-    return p;
+    if (best >= 0) {
+      void* p = blocks[best].p;
+      remove(best);
+      return p;
+    }
+    for (std::size_t freed = 0; n > 0 && freed < want;) {
+      freed += blocks[0].size;
+      std::free(blocks[0].p);
+      remove(0);
+    }
+    return nullptr;
   }
   // Keeps p (usable size `size`), freeing the oldest blocks to make room.
   void give(void* p, std::size_t size) {
@@ -139,4 +154,23 @@ void operator delete(void* p, std::size_t) noexcept {
 void operator delete[](void* p, std::size_t) noexcept {
   release(p);
 }
+
+namespace hbil::alloc {
+bool large_pages_active() {
+  return true;
+}
+std::size_t cached_bytes() {
+  std::lock_guard<std::mutex> lock(cache.m);
+  return cache.bytes;
+}
+}  // namespace hbil::alloc
+#else
+namespace hbil::alloc {
+bool large_pages_active() {
+  return false;
+}
+std::size_t cached_bytes() {
+  return 0;
+}
+}  // namespace hbil::alloc
 #endif
