@@ -11,8 +11,9 @@
 //    that it fits within an eighth, so that the next frame's planes are the last frame's
 //    memory, neither faulted nor cleared again. The oldest blocks go first when it is full.
 //    A request that no block fits first frees at least its own size of cached blocks, the
-//    oldest first (or all of them). So live and cached memory together grow only when the
-//    cache is empty, and then only to what is live: the peak is the one without a cache.
+//    oldest first (or all of them). So live and cached memory together grow on a large
+//    request only when the cache is empty, and then only to what is live: the cache does not
+//    raise the peak that large blocks make.
 // The blocks still come from malloc and go back through free; what a program sees of new and
 // delete is unchanged (new memory is not cleared, as before).
 //
@@ -45,8 +46,9 @@ namespace {
 
 constexpr std::size_t kHugePage = std::size_t(2) << 20;
 constexpr std::size_t kLarge = std::size_t(1) << 20;
-// What the cache may hold: about ten 1920x1080 planes of three floats. It adds at most this
-// to a run's peak memory, and only while blocks of sizes not asked for again sit in it.
+// What the cache may hold: about ten 1920x1080 planes of three floats. A large request that
+// no block fits frees cached memory first (Cache::take), so the cache adds to a run's peak
+// memory only what requests under kLarge take while it holds blocks.
 constexpr std::size_t kCacheBytes = std::size_t(256) << 20;
 constexpr int kSlots = 32;
 
