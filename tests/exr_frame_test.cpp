@@ -269,6 +269,28 @@ TEST(ExrLayouts, ChannelListBeyondItsSizeIsRefusedBeforeReading) {
   }
 }
 
+// A channel list that ends before its attribute's size: OpenEXR goes on reading attributes
+// from the list's end, this walk from the claimed size, and it missed a data window of
+// 16646160x9 that OpenEXR then sized its line buffers from (found by tests/fuzz/fuzz_povray).
+// Refused, exit 3, before OpenImageIO opens the file.
+TEST(ExrLayouts, ChannelListEndingBeforeItsSizeIsRefusedBeforeReading) {
+  TempDir dir{test::test_name()};
+  std::ifstream in(test::kRoomPoles + "/frame_0001.exr", std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const size_t size_at = bytes.find(std::string("channels\0chlist\0", 16)) + 16;
+  ASSERT_LT(size_at, bytes.size());
+  const uint32_t size = uint32_t(uint8_t(bytes[size_at])) |
+                        uint32_t(uint8_t(bytes[size_at + 1])) << 8 |
+                        uint32_t(uint8_t(bytes[size_at + 2])) << 16;
+  const uint32_t v = size + 6;  // six bytes of the next attribute's name taken in
+  for (int b = 0; b < 4; ++b) bytes[size_at + b] = char((v >> (8 * b)) & 0xff);
+  const std::string damaged = dir / "damaged.exr";
+  std::ofstream(damaged, std::ios::binary | std::ios::trunc) << bytes;
+  expect_error([&] { open_frame(damaged, 1, Params{}); }, Exit::input,
+               {damaged, "damaged OpenEXR header",
+                "the channel list ends 6 bytes before its attribute's size"});
+}
+
 // OpenEXR reads a fixed-size value by its type, whatever size the attribute claims, and reads
 // on from there; a walk that skips the claimed size is then out of step with it, and missed an
 // attribute claiming 1.7 GB that OpenEXR allocated (found by tests/fuzz/fuzz_frame). Such a

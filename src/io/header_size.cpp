@@ -131,8 +131,8 @@ struct ExrHeaderFacts {
 // 1 half, 2 float), pLinear and 3 reserved bytes, x and y sampling (int32), then an empty
 // name. OpenImageIO aborts the process on another pixel type, and a sampling below 1
 // divides by zero: both are refused here. So is a list that does not end within the
-// attribute's size: OpenEXR reads on into the next attribute's bytes, and takes its pixel
-// types from there.
+// attribute's size (OpenEXR reads on into the next attribute's bytes, and takes its pixel
+// types from there), or that ends before it.
 void read_channel_list(const std::string& list, ExrHeaderFacts& facts, const std::string& where) {
   facts.formats.clear();  // of two lists, the last counts (as in OpenEXR)
   size_t at = 0;
@@ -161,6 +161,13 @@ void read_channel_list(const std::string& list, ExrHeaderFacts& facts, const std
   if (at >= list.size())
     throw Error(Exit::input,
                 where + ": damaged OpenEXR header: the channel list has no end within its size");
+  // OpenEXR reads the list up to its end and goes on from there, whatever size the attribute
+  // claims: a list that ends before its size puts it out of step with this walk, which then
+  // missed a dataWindow that OpenEXR read (found by tests/fuzz/fuzz_povray).
+  if (at + 1 != list.size())
+    throw Error(Exit::input, where + ": damaged OpenEXR header: the channel list ends " +
+                                 std::to_string(list.size() - at - 1) +
+                                 " bytes before its attribute's size");
 }
 
 // Takes the attributes the size check needs from their value bytes.
