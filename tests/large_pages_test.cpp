@@ -1,7 +1,7 @@
 // The programs' operator new for large blocks (src/alloc/large_pages.cpp): a freed plane is
 // the next plane of its size, a block is reused within an eighth of its size, a request that
-// no block fits frees as much cached memory, and blocks survive being passed between threads. Not
-// under AddressSanitizer, where the sanitizer's own operator new is in place.
+// no block fits frees as much cached memory, and blocks survive being passed between
+// threads. Not under AddressSanitizer, where the sanitizer's own operator new is in place.
 #include "alloc/large_pages.h"
 
 #include <gtest/gtest.h>

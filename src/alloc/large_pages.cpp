@@ -69,10 +69,17 @@ struct Cache {
     for (int i = k + 1; i < n; ++i) blocks[i - 1] = blocks[i];
     --n;
   }
+  // Frees the oldest block; its size.
+  std::size_t free_oldest() {
+    const std::size_t size = blocks[0].size;
+    std::free(blocks[0].p);
+    remove(0);
+    return size;
+  }
   // The smallest cached block of at least `want` bytes and at most want + want/8, taken out.
   // Where none fits, the oldest blocks are freed until they make up `want` (or none is
   // left), so that the memory the caller then gets from malloc replaces cached memory
-  // instead of adding to it: the cache never raises a program's peak (see above).
+  // instead of adding to it (see above).
   void* take(std::size_t want) {
     std::lock_guard<std::mutex> lock(m);
     int best = -1;
@@ -85,21 +92,14 @@ struct Cache {
       remove(best);
       return p;
     }
-    for (std::size_t freed = 0; n > 0 && freed < want;) {
-      freed += blocks[0].size;
-      std::free(blocks[0].p);
-      remove(0);
-    }
+    for (std::size_t freed = 0; n > 0 && freed < want;) freed += free_oldest();
     return nullptr;
   }
   // Keeps p (usable size `size`), freeing the oldest blocks to make room.
   void give(void* p, std::size_t size) {
     if (size > kCacheBytes) return std::free(p);
     std::lock_guard<std::mutex> lock(m);
-    while (n > 0 && (n == kSlots || bytes + size > kCacheBytes)) {
-      std::free(blocks[0].p);
-      remove(0);
-    }
+    while (n > 0 && (n == kSlots || bytes + size > kCacheBytes)) free_oldest();
     blocks[n++] = {p, size};
     bytes += size;
   }
