@@ -7,6 +7,7 @@
 #include "hbil/error.h"
 #include "hbil/reduced.h"
 #include "hbil/scene_scale.h"
+#include "hbil/unseen.h"
 #include "io/camera_io.h"
 #include "io/exr_frame.h"
 #include "io/sequence.h"
@@ -113,9 +114,16 @@ void info(const std::string& path, const ParamOptions& po) {
         throw Error(Exit::missing_pass, "needs DiffCol and DiffDir");
       GBuffer g = pixels;
       const Camera c = io::find_camera(f, g, p);
-      const Vec3 u = mean_direct_radiance(make_view_gbuffer(g, c, p), g) * kAutoUnseen;
+      const ViewGBuffer v = make_view_gbuffer(g, c, p);
+      const Vec3 u = mean_direct_radiance(v, g) * kAutoUnseen;
       std::cout << "auto = " << u.x << " " << u.y << " " << u.z << " (" << kAutoUnseen
                 << " x the mean DiffCol x DiffDir + Emit of the frame's geometry)\n";
+      // What escapes, from the frame's background (unseen.h), over the hemisphere of a normal
+      // facing up, the camera (level) and down.
+      const EscapeTable escape(escape_profile(v, c));
+      std::cout << "  escape over a normal's hemisphere (each pixel's fill: auto x (1 - it)): up "
+                << escape.at(Vec3{0, -1, 0}) << ", level " << escape.at(Vec3{0, 0, -1}) << ", down "
+                << escape.at(Vec3{0, 1, 0}) << "\n";
     } catch (const Error& e) {
       std::cout << "not available: " << e.what() << "\n";
     }

@@ -11,6 +11,7 @@
 #include "hbil/multibounce.h"
 #include "hbil/reduced.h"
 #include "hbil/spatial_filter.h"
+#include "hbil/unseen.h"
 
 namespace hbil {
 
@@ -121,13 +122,25 @@ HorizonImage search_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& 
   // Each buffer is released at its last use: the feedback and the previous bounce once the
   // source radiance is made, the source radiance once the march has what it reads.
   HorizonImage h;
-  // unseen_radiance "auto": a fraction of the frame's mean direct outgoing radiance
-  // (params.h), the same for every bounce.
+  // unseen_radiance "auto": a fraction of the frame's mean direct outgoing radiance, times
+  // what does not escape over each pixel's hemisphere (unseen.h), the same for every bounce.
   const float u = float(p.unseen_radiance);
-  if (gather)
-    c.fill = p.unseen_radiance_auto ? mean_direct_radiance(v, g) * kAutoUnseen : Vec3{u, u, u};
-  // The radiance cache's fill per searched pixel, with unseen_radiance where it knows nothing.
   std::vector<Vec3> fill_map;
+  if (gather && p.unseen_radiance_auto) {
+    const EscapeProfile escape = escape_profile(v, cam);
+    c.fill = mean_direct_radiance(v, g) * kAutoUnseen;
+    if (!(in.cache && !in.cache->empty())) {
+      fill_map = unseen_fill_map(sv, escape, c.fill);
+      c.fill_map = fill_map.data();
+    } else {
+      // The radiance cache's fallback is one radiance: the fill of a normal along the
+      // view's up-down axis' middle, the horizontal.
+      c.fill = c.fill * (1.f - EscapeTable(escape).at(Vec3{0, 0, -1}));
+    }
+  } else if (gather) {
+    c.fill = Vec3{u, u, u};
+  }
+  // The radiance cache's fill per searched pixel, with unseen_radiance where it knows nothing.
   if (gather && in.cache && !in.cache->empty()) {
     fill_map = in.cache->fill_map(sv, cam, in.frame, c.fill);
     c.fill_map = fill_map.data();

@@ -1,0 +1,126 @@
+// unseen.cpp: see unseen.h.
+#include "hbil/unseen.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace hbil {
+
+namespace {
+
+constexpr int kBands = EscapeProfile::kBands;
+
+int band_of(double sin_elevation) {
+  return std::clamp(int((sin_elevation + 1.0) * 0.5 * kBands), 0, kBands - 1);
+}
+
+}  // namespace
+
+EscapeProfile escape_profile(const ViewGBuffer& v, const Camera& cam) {
+  struct Sums {
+    std::array<double, kBands> all{}, open{};
+  };
+  // In rows, then row sums in order: the same for any thread count.
+  // Every step-th pixel of every step-th row, at most about 256 across: a statistic.
+  const int step = std::max(1, std::max(v.width, v.height) / 256);
+  const int n_rows = v.height > 0 ? (v.height + step - 1) / step : 0;
+  std::vector<Sums> rows(static_cast<size_t>(n_rows));
+  tbb::parallel_for(0, n_rows, [&](int row) {
+    Sums& s = rows[size_t(row)];
+    const int y = row * step + step / 2 < v.height ? row * step + step / 2 : row * step;
+    for (int x = step / 2; x < v.width; x += step) {
+      const Vec3d r = cam.unproject(x + 0.5, y + 0.5, 1.0);
+      const double len2 = dot(r, r), len = std::sqrt(len2);
+      // A pixel's solid angle is its area at z = 1 over |r|^3; up is −y.
+      const double w = 1.0 / (len2 * len);
+      const int b = band_of(-r.y / len);
+      s.all[size_t(b)] += w;
+      if (v.is_background(size_t(y) * v.width + x)) s.open[size_t(b)] += w;
+    }
+  });
+  Sums sum;
+  double total = 0;
+  for (const Sums& s : rows)
+    for (int b = 0; b < kBands; ++b) {
+      sum.all[size_t(b)] += s.all[size_t(b)];
+      sum.open[size_t(b)] += s.open[size_t(b)];
+      total += s.all[size_t(b)];
+    }
+  EscapeProfile p;
+  // A band counts as seen with at least 1/1000 of the frame's solid angle (a sliver at the
+  // frame's corner says little about its band).
+  std::array<bool, kBands> seen{};
+  int lo = kBands, hi = -1;
+  for (int b = 0; b < kBands; ++b) {
+    seen[size_t(b)] = total > 0 && sum.all[size_t(b)] >= 1e-3 * total;
+    if (!seen[size_t(b)]) continue;
+    p.open[size_t(b)] = float(sum.open[size_t(b)] / sum.all[size_t(b)]);
+    lo = std::min(lo, b);
+    hi = std::max(hi, b);
+  }
+  if (hi < 0) return p;  // nothing seen: nothing escapes
+  p.lowest_seen = lo;
+  p.highest_seen = hi;
+  for (int b = 0; b < kBands; ++b) {
+    if (seen[size_t(b)]) continue;
+    // Above the frame the top band's fraction, below it the bottom band's; a band inside
+    // the frame's range with too little of it takes the nearest seen band below.
+    int from = b > hi ? hi : lo;
+    if (b > lo && b < hi)
+      for (from = b - 1; !seen[size_t(from)]; --from) {
+      }
+    p.open[size_t(b)] = p.open[size_t(from)];
+  }
+  return p;
+}
+
+EscapeTable::EscapeTable(const EscapeProfile& profile) {
+  // Directions on a grid of equal solid angles: uniform in sin(elevation) (kSub rows per
+  // band) and in azimuth. The table's normals have no z, so only |x| and y of a direction
+  // matter, and each row's weights are the same for every profile.
+  constexpr int kSub = 8, kRows = kBands * kSub, kAzimuths = 64;
+  constexpr double kPi = 3.14159265358979323846;
+  static const std::vector<double> cos_azimuth = [] {
+    std::vector<double> c(kAzimuths);
+    for (int a = 0; a < kAzimuths; ++a) c[size_t(a)] = std::cos(2 * kPi * (a + 0.5) / kAzimuths);
+    return c;
+  }();
+  for (int k = 0; k < kTable; ++k) {
+    const double sn = -1.0 + 2.0 * k / (kTable - 1), cn = std::sqrt(std::max(0.0, 1 - sn * sn));
+    double open = 0, all = 0;
+    for (int r = 0; r < kRows; ++r) {
+      const double s = -1.0 + 2.0 * (r + 0.5) / kRows, ce = std::sqrt(1 - s * s);
+      // n·d with n = (cn, −sn, 0), d = (ce cos φ, −s, ce sin φ)
+      double row = 0;
+      for (const double ca : cos_azimuth) row += std::max(0.0, cn * ce * ca + sn * s);
+      all += row;
+      open += row * profile.open[size_t(r / kSub)];
+    }
+    table_[size_t(k)] = all > 0 ? float(open / all) : 0.f;
+  }
+}
+
+float EscapeTable::at(const Vec3& n) const {
+  const float s = std::clamp(-n.y, -1.f, 1.f);
+  const float u = (s + 1.f) * 0.5f * float(kTable - 1);
+  const int k = std::min(int(u), kTable - 2);
+  const float a = u - float(k);
+  return table_[size_t(k)] * (1.f - a) + table_[size_t(k + 1)] * a;
+}
+
+std::vector<Vec3> unseen_fill_map(const ViewGBuffer& sv, const EscapeProfile& profile,
+                                  const Vec3& fill) {
+  const EscapeTable table(profile);
+  std::vector<Vec3> out(sv.pixels());
+  tbb::parallel_for(0, sv.height, [&](int y) {
+    for (int x = 0; x < sv.width; ++x) {
+      const size_t i = size_t(y) * sv.width + x;
+      if (!sv.is_background(i)) out[i] = fill * (1.f - table.at(sv.normal[i]));
+    }
+  });
+  return out;
+}
+
+}  // namespace hbil

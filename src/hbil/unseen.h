@@ -1,0 +1,58 @@
+// unseen.h: what the gather's empty directions see with unseen_radiance "auto".
+//
+// The directions in which the search finds nothing (off screen, or beyond gather_radius)
+// see either a surface the frame does not show or the render's background (the sky, whose
+// light Cycles and POV-Ray count as direct). Which, the G-buffer says only for the
+// directions the camera sees: its background pixels are lines of sight that escape. "auto"
+// takes the frame's escape fraction per band of elevation (the angle above the image's
+// horizontal, in view space) and carries the top band's fraction up to the zenith and the
+// bottom band's down to the nadir: an open sky at the top of the frame stays open above
+// it, a ceiling stays closed. A pixel with normal n then sees, in its empty directions,
+//
+//   fill(n) = kAutoUnseen x (mean direct outgoing radiance of the frame's geometry)
+//             x (1 − the cosine-weighted escape fraction over n's hemisphere),
+//
+// so that an enclosed room keeps the former constant and a ground plane under open sky gets
+// almost nothing.
+#pragma once
+
+#include <array>
+#include <vector>
+
+#include "hbil/camera.h"
+#include "hbil/gbuffer.h"
+#include "hbil/vecmath.h"
+
+namespace hbil {
+
+// The fraction of lines of sight that escape (background pixels), per band of
+// sin(elevation) over [-1, 1] (band 0 looks straight down, kBands - 1 straight up), with
+// the bands the frame does not reach carried from its top and bottom bands. Each pixel
+// counts with its solid angle. A frame without pixels escapes nowhere.
+struct EscapeProfile {
+  static constexpr int kBands = 16;
+  std::array<float, kBands> open{};
+  int lowest_seen = 0, highest_seen = 0;  // the bands the frame reaches
+};
+// `v`: the full-resolution view G-buffer, `cam` its camera (raster = v's pixel grid).
+EscapeProfile escape_profile(const ViewGBuffer& v, const Camera& cam);
+
+// The cosine-weighted escape fraction over the hemisphere of a unit view-space normal n
+// (it depends only on n's elevation: kTable entries over sin(elevation), interpolated).
+class EscapeTable {
+ public:
+  static constexpr int kTable = 65;
+  explicit EscapeTable(const EscapeProfile& profile);
+  float at(const Vec3& n) const;
+
+ private:
+  std::array<float, kTable> table_{};
+};
+
+// The fill per pixel of the searched view `sv` (possibly reduced: only its normals and
+// background are read): `fill` x (1 − the escape fraction over each normal's hemisphere);
+// zero on background. The same for any thread count.
+std::vector<Vec3> unseen_fill_map(const ViewGBuffer& sv, const EscapeProfile& profile,
+                                  const Vec3& fill);
+
+}  // namespace hbil

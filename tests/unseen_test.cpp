@@ -1,0 +1,113 @@
+// unseen_test.cpp: unseen_radiance "auto"'s escape model (unseen.h) against closed forms:
+// the escape profile of frames whose background is known, the cosine-weighted escape over a
+// hemisphere under an open upper half-space, and the fill map.
+#include "hbil/unseen.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+namespace hbil {
+namespace {
+
+constexpr int kBands = EscapeProfile::kBands;
+
+// A level pinhole camera (principal point at the centre) over a w x h view whose pixels
+// above row `sky_rows` are background and the others geometry with normal n.
+struct Frame {
+  Camera cam;
+  ViewGBuffer v;
+};
+Frame frame(int w, int h, int sky_rows, Vec3 n = {0, 0, -1}) {
+  Frame f;
+  f.cam.width = w, f.cam.height = h;
+  f.cam.fx = f.cam.fy = 0.8 * w;  // about 64 degrees across
+  f.cam.cx = 0.5 * w, f.cam.cy = 0.5 * h;
+  f.v.width = w, f.v.height = h;
+  f.v.position.resize(f.v.pixels());
+  f.v.normal.resize(f.v.pixels());
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const size_t i = size_t(y) * w + x;
+      if (y < sky_rows) {
+        f.v.position[i] = Vec3{0, 0, std::numeric_limits<float>::infinity()};
+      } else {
+        f.v.position[i] = Vec3(f.cam.unproject(x + 0.5, y + 0.5, 2.0));
+        f.v.normal[i] = n;
+      }
+    }
+  return f;
+}
+
+Vec3 at_elevation(double e) {  // a unit view-space normal e above the horizontal (up is −y)
+  return Vec3{float(std::cos(e)), float(-std::sin(e)), 0.f};
+}
+
+TEST(Unseen, AFrameOfGeometryEscapesNowhere) {
+  const Frame f = frame(64, 36, 0);
+  const EscapeProfile p = escape_profile(f.v, f.cam);
+  for (int b = 0; b < kBands; ++b) EXPECT_EQ(p.open[size_t(b)], 0.f) << b;
+  const EscapeTable t(p);
+  for (double e : {-1.5, -0.7, 0.0, 0.7, 1.5}) EXPECT_EQ(t.at(at_elevation(e)), 0.f) << e;
+}
+
+TEST(Unseen, AFrameOfBackgroundEscapesEverywhere) {
+  const Frame f = frame(64, 36, 36);
+  const EscapeProfile p = escape_profile(f.v, f.cam);
+  for (int b = 0; b < kBands; ++b) EXPECT_FLOAT_EQ(p.open[size_t(b)], 1.f) << b;
+  const EscapeTable t(p);
+  for (double e : {-1.5, -0.7, 0.0, 0.7, 1.5}) EXPECT_NEAR(t.at(at_elevation(e)), 1.f, 1e-6) << e;
+}
+
+// Sky above the horizon line, ground below, a level camera: the bands above the horizontal
+// are open, those below closed, and the ones beyond the frame's 36-degree height carry the
+// top and bottom bands' fractions.
+TEST(Unseen, AnOpenSkyAboveTheHorizonOpensTheUpperBands) {
+  const Frame f = frame(64, 36, 18);
+  const EscapeProfile p = escape_profile(f.v, f.cam);
+  for (int b = 0; b < kBands; ++b)
+    EXPECT_FLOAT_EQ(p.open[size_t(b)], b >= kBands / 2 ? 1.f : 0.f) << b;
+  // The frame reaches sin(elevation) ±0.33: bands 5 to 10.
+  EXPECT_EQ(p.lowest_seen, 5);
+  EXPECT_EQ(p.highest_seen, 10);
+}
+
+// Under an open upper half-space, the cosine-weighted fraction of a hemisphere above the
+// horizontal is the sky view factor of a plane tilted from the zenith: (1 + sin e) / 2 for
+// a normal at elevation e.
+TEST(Unseen, TheHemispheresEscapeIsTheSkyViewFactor) {
+  EscapeProfile p;
+  for (int b = kBands / 2; b < kBands; ++b) p.open[size_t(b)] = 1.f;
+  const EscapeTable t(p);
+  for (double deg = -90; deg <= 90; deg += 7.5) {
+    const double e = deg * std::numbers::pi / 180;
+    EXPECT_NEAR(t.at(at_elevation(e)), (1 + std::sin(e)) / 2, 2e-3) << deg;
+  }
+  // Two open bands out of sixteen, straight up: a normal facing up sees them with weight
+  // ∫ cos over the cap sin(elevation) > 0.75, that is 1 − 0.75² of the hemisphere.
+  EscapeProfile cap;
+  cap.open[kBands - 1] = cap.open[kBands - 2] = 1.f;
+  EXPECT_NEAR(EscapeTable(cap).at(at_elevation(std::numbers::pi / 2)), 1 - 0.75 * 0.75, 2e-3);
+}
+
+// The fill map: fill x (1 − escape over the normal's hemisphere), nothing on background.
+TEST(Unseen, TheFillMapDimsTheFillByTheEscape) {
+  const Vec3 up{0, -1, 0};  // a ground plane's normal
+  const Frame f = frame(64, 36, 18, up);
+  const Vec3 fill{0.2f, 0.4f, 0.8f};
+  const std::vector<Vec3> m = unseen_fill_map(f.v, escape_profile(f.v, f.cam), fill);
+  ASSERT_EQ(m.size(), f.v.pixels());
+  EXPECT_EQ(m[0].x, 0.f);  // sky
+  const size_t ground = f.v.pixels() - 1;
+  EXPECT_NEAR(m[ground].x, 0.f, 1e-3);  // facing the open sky: almost nothing
+  const Frame wall = frame(64, 36, 18, Vec3{0, 0, -1});
+  const std::vector<Vec3> mw = unseen_fill_map(wall.v, escape_profile(wall.v, wall.cam), fill);
+  EXPECT_NEAR(mw[ground].z, 0.5f * fill.z, 2e-3);  // a wall: half its hemisphere is sky
+  const Frame room = frame(64, 36, 0, up);
+  const std::vector<Vec3> mr = unseen_fill_map(room.v, escape_profile(room.v, room.cam), fill);
+  EXPECT_EQ(mr[ground].y, fill.y);  // enclosed: the whole fill
+}
+
+}  // namespace
+}  // namespace hbil
