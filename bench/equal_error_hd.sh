@@ -6,13 +6,14 @@
 #   SPP_ROOM_POLES="8 16" SPP_COURTYARD="4 8"   the Cycles rungs around hbil's equal-error
 #       point of the 256x144 ladder (bench/equal_error.sh), the defaults
 #   RUNS=3 BLENDER=blender KEEP=dir
+#   PRESET=presets/interior.json   hbil's preset (default: none, the built-in defaults)
 #
 # Each dir holds a 1920x1080 sequence of the scene rendered as samples/README.md says
 # (`--size 1920x1080 --samples 1`, back faces merged, sidecars), frames 1-4. For every scene:
 #  - Cycles renders frame 1 at 1920x1080 at each rung, seed 7, with full GI (`--mode main`)
 #    and with direct light only (`--bounces 0`); its time is `cycles.ViewLayer.render_time`
 #    from the EXR header (path tracing only), as in equal_error.sh;
-#  - `hbil run DIR/frame_####.exr --no-display` (default preset) RUNS times, before, between
+#  - `hbil run DIR/frame_####.exr --no-display` (default preset, or PRESET) RUNS times, before, between
 #    and after the renders, so that a shared machine's load falls on both; median of its
 #    summary line's "s per frame" (reading, computing, writing).
 # Prints one line per render and per hbil run, then the medians. The equal-error time is
@@ -24,6 +25,8 @@ cd "$(dirname "$0")/.."
 hbil=${1:-build/hbil}
 runs=${RUNS:-3}
 blender=${BLENDER:-blender}
+preset=()
+[ -n "${PRESET:-}" ] && preset=(--preset "$PRESET")
 work=${KEEP:-$(mktemp -d)}
 [ -n "${KEEP:-}" ] || trap 'rm -rf "$work"' EXIT
 mkdir -p "$work"
@@ -49,7 +52,7 @@ render() {  # render SCENE KIND SPP
 }
 hbil_run() {  # hbil_run SCENE DIR
   rm -rf "$work/out"
-  "$hbil" run "$2/frame_####.exr" -o "$work/out/frame_####.exr" --no-display 2>&1 |
+  "$hbil" run "$2/frame_####.exr" -o "$work/out/frame_####.exr" --no-display "${preset[@]}" 2>&1 |
     sed -n "s/.* \([0-9.]*\) s per frame.*/$1 hbil: \1 s per frame/p"
 }
 

@@ -63,7 +63,8 @@ struct FrameInputs {
 };
 Params resolve_frame_outputs(const GBuffer& g, const Params& requested);
 // unseen_radiance "auto" = kAutoUnseen x the mean over the frame's geometry pixels of its
-// direct outgoing radiance, DiffCol x DiffDir + Emit. Chosen on samples/room_poles (the best
+// direct outgoing radiance, DiffCol x DiffDir + Emit, times, per pixel, what does not escape
+// over its hemisphere (unseen.h). The factor was chosen on samples/room_poles (the best
 // of 0.3-1.5 for the composite against the 8-bounce render over its camera move; README,
 // "Light from what the frame does not show", for the scenes it was checked on).
 constexpr float kAutoUnseen = 0.8f;

@@ -55,7 +55,8 @@ struct Params {
   int gather_steps = 16;  // gather-only samples per side beyond radius
   // Radiance of the directions where the gather finds no surface (nothing within
   // gather_radius, or the screen edge first); "auto": kAutoUnseen x the frame's mean direct
-  // outgoing radiance (ao_frame.h).
+  // outgoing radiance (ao_frame.h), times what does not escape over each pixel's hemisphere
+  // (unseen.h).
   double unseen_radiance = 0.0;
   bool unseen_radiance_auto = false;
   std::string environment;  // far field: "" (off), equirect EXR path, or "rgb:r,g,b"
