@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 namespace hbil {
@@ -107,6 +108,21 @@ TEST(Unseen, TheFillMapDimsTheFillByTheEscape) {
   const Frame room = frame(64, 36, 0, up);
   const std::vector<Vec3> mr = unseen_fill_map(room.v, escape_profile(room.v, room.cam), fill);
   EXPECT_EQ(mr[ground].y, fill.y);  // enclosed: the whole fill
+}
+
+// Nothing the model is given ends outside its tables: a NaN normal reads as facing down, a
+// camera with no focal length counts nothing.
+TEST(Unseen, NonFiniteInputsStayInTheTables) {
+  EscapeProfile p;
+  p.open[0] = 0.25f;  // straight down
+  const EscapeTable t(p);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_EQ(t.at(Vec3{nan, nan, nan}), t.at(Vec3{0, 1, 0}));
+  EXPECT_GT(t.at(Vec3{0, 1, 0}), 0.f);
+  Frame f = frame(16, 9, 4);
+  f.cam.fx = f.cam.fy = 0;
+  const EscapeProfile none = escape_profile(f.v, f.cam);
+  for (int b = 0; b < kBands; ++b) EXPECT_EQ(none.open[size_t(b)], 0.f) << b;
 }
 
 }  // namespace

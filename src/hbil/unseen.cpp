@@ -12,8 +12,10 @@ namespace {
 
 constexpr int kBands = EscapeProfile::kBands;
 
+// NaN (a camera without a usable focal length) counts as straight down.
 int band_of(double sin_elevation) {
-  return std::clamp(int((sin_elevation + 1.0) * 0.5 * kBands), 0, kBands - 1);
+  const double u = (sin_elevation + 1.0) * 0.5 * kBands;
+  return u >= 0 ? std::min(int(std::min(u, double(kBands))), kBands - 1) : 0;
 }
 
 }  // namespace
@@ -35,6 +37,7 @@ EscapeProfile escape_profile(const ViewGBuffer& v, const Camera& cam) {
       const double len2 = dot(r, r), len = std::sqrt(len2);
       // A pixel's solid angle is its area at z = 1 over |r|^3; up is −y.
       const double w = 1.0 / (len2 * len);
+      if (!(w > 0 && w < HUGE_VAL)) continue;
       const int b = band_of(-r.y / len);
       s.all[size_t(b)] += w;
       if (v.is_background(size_t(y) * v.width + x)) s.open[size_t(b)] += w;
@@ -103,7 +106,8 @@ EscapeTable::EscapeTable(const EscapeProfile& profile) {
 }
 
 float EscapeTable::at(const Vec3& n) const {
-  const float s = std::clamp(-n.y, -1.f, 1.f);
+  const float y = -n.y;
+  const float s = y > -1.f ? (y < 1.f ? y : 1.f) : -1.f;  // NaN: straight down
   const float u = (s + 1.f) * 0.5f * float(kTable - 1);
   const int k = std::min(int(u), kTable - 2);
   const float a = u - float(k);
