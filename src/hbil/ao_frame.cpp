@@ -133,8 +133,7 @@ HorizonImage search_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& 
       fill_map = unseen_fill_map(sv, escape, c.fill);
       c.fill_map = fill_map.data();
     } else {
-      // The radiance cache's fallback is one radiance: the fill of a normal along the
-      // view's up-down axis' middle, the horizontal.
+      // The radiance cache's fallback is one radiance: the fill of a level normal.
       c.fill = c.fill * (1.f - EscapeTable(escape).at(Vec3{0, 0, -1}));
     }
   } else if (gather) {
