@@ -143,6 +143,20 @@ std::string run_args(const std::string& in_pattern, const std::string& out_patte
   return "run " + q(in_pattern) + " -o " + q(out_pattern) + " " + extra;
 }
 
+// unseen_radiance "auto" says what it does, where a gathered output uses it.
+TEST_F(Cli, RunSaysWhatUnseenRadianceAutoDoes) {
+  const std::string interior = q(std::string(HBIL_SOURCE_DIR) + "/presets/interior.json");
+  const RunResult r = hbil(run_args(test::kRoomPoles + "/frame_####.exr", path("a/f_####.exr"),
+                                    "--frames 1 --no-display --preset " + interior));
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(contains(r.err, "hbil: unseen_radiance auto: per frame, 0.8 x the mean")) << r.err;
+  const RunResult ao =
+      hbil(run_args(test::kRoomPoles + "/frame_####.exr", path("b/f_####.exr"),
+                    "--frames 1 --no-display --preset " + interior + " --set 'outputs=[\"ao\"]'"));
+  ASSERT_EQ(ao.code, 0) << ao.err;
+  EXPECT_FALSE(contains(ao.err, "unseen_radiance")) << ao.err;
+}
+
 TEST_F(Cli, RunWritesLayersAndMetadata) {
   const RunResult r = hbil(
       run_args(test::kRoomPoles + "/frame_####.exr", path("out/out_####.exr"), "--frames 1-2"));
@@ -151,6 +165,7 @@ TEST_F(Cli, RunWritesLayersAndMetadata) {
   EXPECT_TRUE(contains(r.err, "camera: sidecar frame_0002.camera.json")) << r.err;
   EXPECT_TRUE(contains(r.err, "hbil: outputs: ao, bentcone, irradiance, indirect, composite"))
       << r.err;
+  EXPECT_FALSE(contains(r.err, "unseen_radiance")) << r.err;  // 0 by default: nothing to say
   EXPECT_TRUE(contains(r.err, "display images " + path("out/out_####.png") + " (composite)"))
       << r.err;
   const auto files = snapshot(path("out"));

@@ -12,6 +12,7 @@
 #include <sstream>
 
 #include "cli/commands.h"
+#include "hbil/ao_frame.h"
 #include "hbil/error.h"
 #include "hbil/march.h"
 #include "hbil/reduced.h"
@@ -87,6 +88,11 @@ void run_frames(const RunOptions& o, io::RunLog& log, int& written) {
                 << job.why_dropped() << "\n";
     if (!job.scene_description().empty())
       std::cerr << "hbil: auto: " << job.scene_description() << "\n";
+    if (p.unseen_radiance_auto && gathers(p))
+      std::cerr << "hbil: unseen_radiance auto: per frame, " << kAutoUnseen
+                << " x the mean DiffCol x DiffDir + Emit of its geometry, times 1 - what its"
+                   " background says escapes over each pixel's hemisphere (hbil info FRAME"
+                   " prints both)\n";
     if (p.method == "bitmask") {
       std::ostringstream s;
       s << "hbil: bitmask thickness: ";
