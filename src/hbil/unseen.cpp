@@ -81,8 +81,8 @@ EscapeProfile escape_profile(const ViewGBuffer& v, const Camera& cam) {
 
 EscapeTable::EscapeTable(const EscapeProfile& profile) {
   // Directions on a grid of equal solid angles: uniform in sin(elevation) (kSub rows per
-  // band) and in azimuth. The table's normals have no z, so only |x| and y of a direction
-  // matter, and each row's weights are the same for every profile.
+  // band) and in azimuth. The table's normals have no z, so a direction's cosine with one
+  // depends only on the direction's elevation and the cosine of its azimuth.
   constexpr int kSub = 8, kRows = kBands * kSub, kAzimuths = 64;
   constexpr double kPi = 3.14159265358979323846;
   static const std::vector<double> cos_azimuth = [] {
