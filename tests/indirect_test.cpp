@@ -124,15 +124,15 @@ void check_unseen_radiance(const std::string& method, bool automatic) {
   }
   const ViewGBuffer v = make_view_gbuffer(s.g, s.cam, p);
   const EscapeProfile escape = escape_profile(v, s.cam);
-  const EscapeTable closed(escape);
+  const EscapeTable escapes(escape);
   if (automatic) {  // the groove's open side is in the frame: some of it escapes
-    ASSERT_GT(closed.at(v.normal[v.pixels() / 2]), 0.05f);
+    ASSERT_GT(escapes.at(v.normal[v.pixels() / 2]), 0.05f);
   }
   const AoFrame f = compute_ao_frame(s.g, s.cam, p);
   const int checked = for_each_face_a_point(s, [&](size_t i, double occluded, double d) {
     // Bitmask: 32 sectors quantise the boundary, as in check_uniform_radiance.
     const double tol = method == "bitmask" ? 0.04 : 0.02;
-    const Vec3 Ui = automatic ? U * (1.f - closed.at(v.normal[i])) : U;
+    const Vec3 Ui = automatic ? U * (1.f - escapes.at(v.normal[i])) : U;
     EXPECT_NEAR(f.irradiance[i].x, L.x * occluded + Ui.x * (1 - occluded), tol * L.x) << d;
     EXPECT_NEAR(f.irradiance[i].z, L.z * occluded + Ui.z * (1 - occluded), tol * L.z) << d;
     EXPECT_NEAR(f.ao[i], 1 - occluded, tol);  // ao is not lit by it
