@@ -124,23 +124,23 @@ HorizonImage search_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& 
   HorizonImage h;
   // unseen_radiance "auto": a fraction of the frame's mean direct outgoing radiance, times
   // what does not escape over each pixel's hemisphere (unseen.h), the same for every bounce.
+  // With the radiance cache, its fill per searched pixel, with unseen_radiance (one
+  // radiance: for "auto", the fill of a level normal) where it knows nothing.
+  const bool cached = gather && in.cache && !in.cache->empty();
   const float u = float(p.unseen_radiance);
   std::vector<Vec3> fill_map;
+  if (gather) c.fill = Vec3{u, u, u};
   if (gather && p.unseen_radiance_auto) {
     const EscapeProfile escape = escape_profile(v, cam);
     c.fill = mean_direct_radiance(v, g) * kAutoUnseen;
-    if (!(in.cache && !in.cache->empty())) {
+    if (cached) {
+      c.fill = c.fill * (1.f - EscapeTable(escape).at(Vec3{0, 0, -1}));
+    } else {
       fill_map = unseen_fill_map(sv, escape, c.fill);
       c.fill_map = fill_map.data();
-    } else {
-      // The radiance cache's fallback is one radiance: the fill of a level normal.
-      c.fill = c.fill * (1.f - EscapeTable(escape).at(Vec3{0, 0, -1}));
     }
-  } else if (gather) {
-    c.fill = Vec3{u, u, u};
   }
-  // The radiance cache's fill per searched pixel, with unseen_radiance where it knows nothing.
-  if (gather && in.cache && !in.cache->empty()) {
+  if (cached) {
     fill_map = in.cache->fill_map(sv, cam, in.frame, c.fill);
     c.fill_map = fill_map.data();
   }
