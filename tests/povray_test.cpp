@@ -201,6 +201,22 @@ TEST(PovrayImport, CameraFileErrorsNameTheFileAndKey) {
   test::expect_error([&] { io::read_povray_camera(write(mirrored)); }, Exit::camera, {"mirrored"});
   test::expect_error([&] { io::read_povray_camera(dir / "nothing.json"); }, Exit::input,
                      {"nothing.json"});
+  // Numbers an int cannot hold, and lengths whose focal length overflows a double: errors,
+  // not undefined casts or an infinite camera.
+  nlohmann::json wide = j;
+  wide["width"] = 1e20;
+  test::expect_error([&] { io::read_povray_camera(write(wide)); }, Exit::camera,
+                     {"camera1.json", "\"width\"", "whole number"});
+  nlohmann::json half_frame = j;
+  half_frame["frame"] = 1.5;
+  test::expect_error([&] { io::read_povray_camera(write(half_frame)); }, Exit::camera,
+                     {"\"frame\"", "whole number"});
+  nlohmann::json huge = j;
+  for (auto& v : huge["direction"]) v = v.get<double>() * 1e300;
+  for (auto& v : huge["right"]) v = v.get<double>() * 1e-150;
+  for (auto& v : huge["up"]) v = v.get<double>() * 1e-150;
+  test::expect_error([&] { io::read_povray_camera(write(huge)); }, Exit::camera,
+                     {"camera1.json", "out of range"});
   // "format" given twice, the second a number: the last counts, and a number was read as a
   // string, an escaping exception (found by tests/fuzz/fuzz_povray).
   std::string text = j.dump();
@@ -574,6 +590,29 @@ TEST(PovrayImport, BadPassesFailWithTheirExitCodeAndWriteNothing) {
   r = test::run_hbil("import-povray " + q(dir / "empty") + " -o " + q(dir / "new/f_####.exr"),
                      dir.path());
   EXPECT_FALSE(fs::exists(dir / "new"));
+}
+
+// A depth_range that decodes the pass's digits beyond float's range: bad data naming the pass
+// and the pixel, never an infinite depth in the frame (found by tests/fuzz/fuzz_povray).
+TEST(PovrayImport, ADepthBeyondAFloatIsBadData) {
+  TempDir dir(test::test_name());
+  nlohmann::json j = nlohmann::json::parse(test::read_text(kAnalytic + "/camera1.json"));
+  j["depth_range"] = 1e300;
+  test::write_text(dir / "camera1.json", j.dump());
+  io::PovrayFrameFiles files;
+  files.frame = 1;
+  files.camera = dir / "camera1.json";
+  files.passes = {{"depth", kAnalytic + "/depth1.exr"}, {"normal", kAnalytic + "/normal1.exr"}};
+  test::expect_error([&] { io::import_povray_frame(files); }, Exit::bad_data,
+                     {"frame 1", "depth1.exr", "depth pass", "pixel (", "beyond a float"});
+  // The same depth pass as back faces, with the camera's own range: finite wherever it hits.
+  files.camera = kAnalytic + "/camera1.json";
+  files.passes["backfaces"] = kAnalytic + "/depth1.exr";
+  const io::ImportedFrame f = io::import_povray_frame(files);
+  const size_t cb = channel(f, "BackFaces.Depth.Z"), cz = channel(f, "ViewLayer.Depth.Z");
+  const size_t nc = f.channels.size();
+  for (size_t i = 0; i < size_t(f.width) * f.height; ++i)
+    ASSERT_EQ(f.pixels[i * nc + cb], f.pixels[i * nc + cz]) << i;
 }
 
 // `hbil compare ... --json` overall PSNR.

@@ -37,6 +37,15 @@ double read_num(const json& j, const char* key, const std::string& path) {
   return camera_file_number(camera_file_key(j, key, path), key, path);
 }
 
+// A whole number that an int holds (a larger one would be undefined as an int).
+int read_int(const json& j, const char* key, const std::string& path) {
+  const double d = read_num(j, key, path);
+  if (!(std::abs(d) < 2147483647.0) || d != std::trunc(d))
+    camera_file_error(path, std::string("key \"") + key + "\" must be a whole number within " +
+                                "+-2147483647, found " + camera_file_key(j, key, path).dump());
+  return int(d);
+}
+
 // A pass image as float, `min_channels` or more channels. Errors name the file and frame.
 struct PassImage {
   int width = 0, height = 0, nchannels = 0;
@@ -87,10 +96,10 @@ PovrayCamera read_povray_camera(const std::string& path) {
   if (!j.is_object() || !j.contains("format") || j["format"] != "hbil-povray-camera-1")
     camera_file_error(path, "key \"format\" must be \"hbil-povray-camera-1\"");
   PovrayCamera c;
-  c.frame = int(read_num(j, "frame", path));
+  c.frame = read_int(j, "frame", path);
   c.clock = read_num(j, "clock", path);
-  c.width = int(read_num(j, "width", path));
-  c.height = int(read_num(j, "height", path));
+  c.width = read_int(j, "width", path);
+  c.height = read_int(j, "height", path);
   c.depth_range = read_num(j, "depth_range", path);
   c.location = read_vec(j, "location", path);
   c.direction = read_vec(j, "direction", path);
@@ -114,6 +123,14 @@ PovrayCamera read_povray_camera(const std::string& path) {
   const double ld = length(c.direction), lr = length(c.right), lu = length(c.up);
   if (!(ld > 0 && lr > 0 && lu > 0))
     camera_file_error(path, "\"direction\", \"right\" and \"up\" must not be zero");
+  // Their lengths and the focal lengths they make must be finite and not vanish.
+  const double fx = c.width * ld / lr, fy = c.height * ld / lu;
+  if (!(std::isfinite(ld * lr * lu) && std::isfinite(fx) && std::isfinite(fy) && fx > 1e-12 &&
+        fy > 1e-12))
+    camera_file_error(path,
+                      "\"direction\", \"right\" and \"up\" have lengths out of range (a focal "
+                      "length of " +
+                          std::to_string(fx) + " pixels)");
   const double tol = 1e-6;
   if (std::abs(dot(c.direction, c.right)) > tol * ld * lr ||
       std::abs(dot(c.direction, c.up)) > tol * ld * lu ||
@@ -250,6 +267,18 @@ ImportedFrame import_povray_frame(const PovrayFrameFiles& files, const std::stri
   };
   const std::string L = view_layer.empty() ? "" : view_layer + ".";
 
+  // A decoded depth as float. Digits far outside [0, 1] or a huge depth_range could decode
+  // beyond float's range: bad data, naming the pass and pixel.
+  auto decoded_depth = [&](const PassImage& img, size_t i, const std::string& pass) {
+    const double d = decode_povray_depth(img.at(i, 0), img.at(i, 1), img.at(i, 2), pc.depth_range);
+    if (!std::isfinite(float(d)))
+      throw Error(Exit::bad_data, where_frame + " (" + files.passes.at(pass) + "), " + pass +
+                                      " pass: pixel (" + std::to_string(i % w) + ", " +
+                                      std::to_string(i / w) + ") decodes to a depth of " +
+                                      std::to_string(d) + ", beyond a float (depth_range " +
+                                      std::to_string(pc.depth_range) + ")");
+    return float(d);
+  };
   std::vector<float> z(n), alpha(n);
   std::vector<bool> hit(n);
   for (size_t i = 0; i < n; ++i) {
@@ -257,9 +286,7 @@ ImportedFrame import_povray_frame(const PovrayFrameFiles& files, const std::stri
     hit[i] =
         depth.at(i, 3) >= 0.5f && (depth.at(i, 0) > 0 || depth.at(i, 1) > 0 || depth.at(i, 2) > 0);
     alpha[i] = hit[i] ? 1.0f : 0.0f;
-    z[i] = hit[i] ? float(decode_povray_depth(depth.at(i, 0), depth.at(i, 1), depth.at(i, 2),
-                                              pc.depth_range))
-                  : kBackgroundDepth;
+    z[i] = hit[i] ? decoded_depth(depth, i, "depth") : kBackgroundDepth;
   }
   add(L + "Depth.Z") = z;
   out.layers.push_back("Depth");
@@ -322,8 +349,12 @@ ImportedFrame import_povray_frame(const PovrayFrameFiles& files, const std::stri
       for (int c = 0; c < 3; ++c) {
         const float col = albedo.at(i, c);
         if (!(col > 0)) continue;
-        const float indirect = ref.at(i, c) - col * direct.at(i, c) - emit.at(i, c);
-        (*ch[c])[i] = std::max(indirect, 0.0f) / col;
+        // In double: float could overflow here. Where it still does, the diffuse colour is
+        // too small to divide by, as where it is 0.
+        const double indirect =
+            double(ref.at(i, c)) - double(col) * direct.at(i, c) - emit.at(i, c);
+        const float v = float(std::max(indirect, 0.0) / col);
+        if (std::isfinite(v)) (*ch[c])[i] = v;
       }
     }
     out.layers.push_back("DiffInd");
@@ -332,9 +363,8 @@ ImportedFrame import_povray_frame(const PovrayFrameFiles& files, const std::stri
     const PassImage img = read("backfaces", 3);
     auto& zb = add("BackFaces.Depth.Z");
     for (size_t i = 0; i < n; ++i) {
-      const double d =
-          decode_povray_depth(img.at(i, 0), img.at(i, 1), img.at(i, 2), pc.depth_range);
-      zb[i] = (hit[i] && d > 0) ? float(d) : kBackgroundDepth;
+      const float d = hit[i] ? decoded_depth(img, i, "backfaces") : 0.0f;
+      zb[i] = d > 0 ? d : kBackgroundDepth;
     }
     out.layers.push_back("BackFaces.Depth");
   }
