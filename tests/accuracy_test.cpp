@@ -7,6 +7,8 @@
 #include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
 
+#include <tuple>
+
 #include "hbil/ao_frame.h"
 #include "hbil/error_stats.h"
 #include "io/exr_frame.h"
@@ -111,29 +113,42 @@ Params indirect_params() {
   return p;
 }
 
+// The screen-space gather alone (unseen_radiance 0): what the thickness models decide.
+Params gather_only_params() {
+  Params p = indirect_params();
+  p.unseen_radiance_auto = false;
+  return p;
+}
+
 TEST(AccuracyAgainstCycles, CourtyardIndirectOneBounce) {
   const ErrorStats e = indirect_error("courtyard", indirect_params());
   EXPECT_GT(e.count, 600000u);
-  EXPECT_GT(e.psnr(), 28.2) << "rmse " << e.rmse() << " mean "
-                            << e.mean_error();  // measured 28.52 dB
+  std::cout << "courtyard: indirect " << e.psnr() << " dB\n";
+  EXPECT_GT(e.psnr(), 33.05) << "rmse " << e.rmse() << " mean "
+                             << e.mean_error();                               // measured 33.36 dB
+  EXPECT_GT(indirect_error("courtyard", gather_only_params()).psnr(), 28.2);  // measured 28.52
 }
 
 TEST(AccuracyAgainstCycles, RoomWithPolesIndirectOneBounce) {
   const ErrorStats e = indirect_error("room_poles", indirect_params());
   EXPECT_GT(e.count, 600000u);
-  EXPECT_GT(e.psnr(), 28.6) << "rmse " << e.rmse() << " mean "
-                            << e.mean_error();  // measured 28.92 dB
+  std::cout << "room_poles: indirect " << e.psnr() << " dB\n";
+  EXPECT_GT(e.psnr(), 30.35) << "rmse " << e.rmse() << " mean "
+                             << e.mean_error();                                // measured 30.67 dB
+  EXPECT_GT(indirect_error("room_poles", gather_only_params()).psnr(), 28.6);  // measured 28.92
 }
 
 // The samples carry a BackFaces.Depth.Z layer (samples/blender/backfaces.py). Measured
-// thickness beats the constant 0.4 on indirect light in both scenes (courtyard 28.52 vs
-// 27.85 dB, room_poles 28.92 vs 28.50) and on the thin-object scene's AO (18.85 vs 18.68);
-// the courtyard's AO loses 0.1 dB (23.46 vs 23.56), so it is not asserted.
+// thickness beats the constant 0.4 on the gather's indirect light in both scenes (courtyard
+// 28.52 vs 27.85 dB, room_poles 28.92 vs 28.50) and on the thin-object scene's AO (18.85 vs
+// 18.68); the courtyard's AO loses 0.1 dB (23.46 vs 23.56), so it is not asserted. With
+// unseen_radiance "auto" the fill of what the gather leaves empty outweighs it (courtyard
+// 33.36 vs 33.41 dB, room_poles 30.67 vs 31.04): the gather alone is compared.
 TEST(AccuracyAgainstCycles, BackFaceThicknessBeatsTheConstant) {
   const Params constant =
-      apply_set(apply_set(indirect_params(), "passes.backdepth=\"\""), "thickness_extent=false");
+      apply_set(apply_set(gather_only_params(), "passes.backdepth=\"\""), "thickness_extent=false");
   for (const char* scene : {"courtyard", "room_poles"})
-    EXPECT_GT(indirect_error(scene, indirect_params()).psnr(),
+    EXPECT_GT(indirect_error(scene, gather_only_params()).psnr(),
               indirect_error(scene, constant).psnr() + 0.3)
         << scene;
   const Params ao,
@@ -143,10 +158,10 @@ TEST(AccuracyAgainstCycles, BackFaceThicknessBeatsTheConstant) {
 
 // Without a back-face layer, the thickness from each object's extent on screen (up to the
 // constant 0.4; thickness_extent) against the constant alone, on the samples' indirect light
-// (measured: room_poles 28.73 against 28.50 dB, courtyard 28.15 against 27.85 dB) and on
-// room_poles' AO.
+// (measured: room_poles 28.73 against 28.50 dB, courtyard 28.15 against 27.85 dB; the gather
+// alone, as above) and on room_poles' AO.
 TEST(AccuracyAgainstCycles, ExtentThicknessBeatsTheConstantWithoutBackFaces) {
-  const Params extent = apply_set(indirect_params(), "passes.backdepth=\"\"");
+  const Params extent = apply_set(gather_only_params(), "passes.backdepth=\"\"");
   const Params constant = apply_set(extent, "thickness_extent=false");
   for (const char* scene : {"room_poles", "courtyard"}) {
     const double e = indirect_error(scene, extent).psnr(),
@@ -163,23 +178,32 @@ TEST(AccuracyAgainstCycles, ExtentThicknessBeatsTheConstantWithoutBackFaces) {
 
 // unseen_radiance "auto" over the temporal chain, composite against the 8-bounce Combined of
 // all 8 frames (as `hbil bench --ref composite=...:Combined`; README "Light from what the
-// frame does not show": room_poles 30.45 dB, courtyard 32.03 dB, the defaults 22.60 and
-// 25.69). Bounds 0.3 dB below. On the open courtyard the frame's sky must dim the fill: with
-// the frame's mean radiance in every empty direction it measured 25.05 dB, below the default.
+// frame does not show": the default, where the elevations the frame does not show escape,
+// room_poles 27.61 dB, courtyard 29.04 dB; with unseen_carry (presets/interior.json) 30.45
+// and 32.03; with unseen_radiance 0, 22.60 and 25.69). Bounds 0.3 dB below. On the open
+// courtyard the frame's sky must dim the fill: with the frame's mean radiance in every empty
+// direction it measured 25.05 dB.
 TEST(AccuracyAgainstCycles, UnseenRadianceAutoOnBothSamples) {
-  Params automatic;
-  automatic.unseen_radiance_auto = true;
-  for (const auto& [scene, bound] : {std::pair{"room_poles", 30.15}, {"courtyard", 31.7}}) {
+  Params off, interior;
+  off.unseen_radiance_auto = false;
+  interior.unseen_carry = true;
+  for (const auto& [scene, bound, carried] :
+       {std::tuple{"room_poles", 27.3, 30.15}, {"courtyard", 28.7, 31.7}}) {
     const std::string in = std::string(HBIL_SOURCE_DIR) + "/samples/" + scene + "/frame_####.exr";
     pipeline::BenchSettings s;
     s.shot = in;
-    s.configs = {{"default", Params{}}, {"auto", automatic}};
+    s.configs = {{"off", off}, {"default", Params{}}, {"interior", interior}};
     s.refs = {pipeline::parse_bench_reference("composite=" + in + ":Combined")};
     const pipeline::BenchResult r = pipeline::run_bench(s);
     const double base = r.configs[0].errors.at("composite").psnr();
     const double with = r.configs[1].errors.at("composite").psnr();
+    const double with_carry = r.configs[2].errors.at("composite").psnr();
+    std::cout << scene << ": composite " << base << " dB off, " << with << " dB default, "
+              << with_carry << " dB carried\n";
     EXPECT_GT(with, bound) << scene;
-    EXPECT_GT(with, base + 5.0) << scene;
+    EXPECT_GT(with, base + 3.0) << scene;
+    EXPECT_GT(with_carry, carried) << scene;
+    EXPECT_GT(with_carry, base + 5.0) << scene;
   }
 }
 

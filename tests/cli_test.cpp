@@ -143,13 +143,21 @@ std::string run_args(const std::string& in_pattern, const std::string& out_patte
   return "run " + q(in_pattern) + " -o " + q(out_pattern) + " " + extra;
 }
 
-// unseen_radiance "auto" says what it does, where a gathered output uses it.
+// unseen_radiance "auto" says what it does, where a gathered output uses it, and what it
+// takes beyond the frame (the interior preset carries the frame's top and bottom); 0 says
+// nothing.
 TEST_F(Cli, RunSaysWhatUnseenRadianceAutoDoes) {
   const std::string interior = q(std::string(HBIL_SOURCE_DIR) + "/presets/interior.json");
   const RunResult r = hbil(run_args(test::kRoomPoles + "/frame_####.exr", path("a/f_####.exr"),
                                     "--frames 1 --no-display --preset " + interior));
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_TRUE(contains(r.err, "hbil: unseen_radiance auto: per frame, 0.8 x the mean")) << r.err;
+  EXPECT_TRUE(contains(r.err, "the elevations it does not show as open as its top and bottom"))
+      << r.err;
+  const RunResult off = hbil(run_args(test::kRoomPoles + "/frame_####.exr", path("c/f_####.exr"),
+                                      "--frames 1 --no-display --set unseen_radiance=0"));
+  ASSERT_EQ(off.code, 0) << off.err;
+  EXPECT_FALSE(contains(off.err, "unseen_radiance")) << off.err;
   const RunResult ao =
       hbil(run_args(test::kRoomPoles + "/frame_####.exr", path("b/f_####.exr"),
                     "--frames 1 --no-display --preset " + interior + " --set 'outputs=[\"ao\"]'"));
@@ -165,7 +173,9 @@ TEST_F(Cli, RunWritesLayersAndMetadata) {
   EXPECT_TRUE(contains(r.err, "camera: sidecar frame_0002.camera.json")) << r.err;
   EXPECT_TRUE(contains(r.err, "hbil: outputs: ao, bentcone, irradiance, indirect, composite"))
       << r.err;
-  EXPECT_FALSE(contains(r.err, "unseen_radiance")) << r.err;  // 0 by default: nothing to say
+  // unseen_radiance "auto" by default, the elevations the frame does not show escaping.
+  EXPECT_TRUE(contains(r.err, "hbil: unseen_radiance auto: per frame")) << r.err;
+  EXPECT_TRUE(contains(r.err, "the elevations it does not show escaping")) << r.err;
   EXPECT_TRUE(contains(r.err, "display images " + path("out/out_####.png") + " (composite)"))
       << r.err;
   const auto files = snapshot(path("out"));
@@ -1040,13 +1050,17 @@ TEST_F(Cli, InfoListsPassesCameraAndOutputs) {
   ASSERT_EQ(env.code, 0) << env.err;
   EXPECT_TRUE(contains(env.out, "farfield: yes")) << env.out;
   // unseen_radiance "auto" is printed with its value: 0.8 x the mean DiffCol x DiffDir + Emit
-  // over the geometry, here against the same mean taken from the frame's own pixels.
-  EXPECT_FALSE(contains(r.out, "unseen_radiance")) << r.out;
+  // over the geometry, here against the same mean taken from the frame's own pixels; by
+  // default the elevations the frame does not show escape, with the interior preset not.
+  EXPECT_TRUE(contains(r.out, "unseen_radiance: auto = ")) << r.out;
+  EXPECT_TRUE(contains(r.out, "elevations the frame does not show escape)")) << r.out;
   const RunResult interior = hbil("info " + q(sample(1)) + " --preset " +
                                   q(std::string(HBIL_SOURCE_DIR) + "/presets/interior.json"));
   ASSERT_EQ(interior.code, 0) << interior.err;
   const size_t at = interior.out.find("unseen_radiance: auto = ");
   ASSERT_NE(at, std::string::npos) << interior.out;
+  EXPECT_TRUE(contains(interior.out, "does not show as open as its top and bottom"))
+      << interior.out;
   std::istringstream line(interior.out.substr(at + 24));
   float red = 0;
   line >> red;

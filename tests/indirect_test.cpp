@@ -55,6 +55,7 @@ Params gather_params(const std::string& method) {
   p.method = method;
   p.thickness = 1e6;  // bitmask: infinitely thick occluders, the horizon's assumption
   p.outputs = {"ao", "irradiance", "indirect"};
+  p.unseen_radiance_auto = false;  // the closed forms: the empty directions send nothing
   return p;
 }
 
@@ -120,10 +121,11 @@ void check_unseen_radiance(const std::string& method, bool automatic) {
     ASSERT_GT(U.x, 0.05f);
     ASSERT_LT(U.x, 0.45f);
   } else {
+    p.unseen_radiance_auto = false;
     p.unseen_radiance = 0.25;
   }
   const ViewGBuffer v = make_view_gbuffer(s.g, s.cam, p);
-  const EscapeProfile escape = escape_profile(v, s.cam);
+  const EscapeProfile escape = escape_profile(v, s.cam, p.unseen_carry);
   const EscapeTable escapes(escape);
   if (automatic) {  // the groove's open side is in the frame: some of it escapes
     ASSERT_GT(escapes.at(v.normal[v.pixels() / 2]), 0.05f);

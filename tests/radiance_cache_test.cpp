@@ -186,6 +186,7 @@ TEST(RadianceCache, AStaticCameraComputesWhatItDoesWithoutTheCache) {
   for (bool vectorised : {true, false}) {
     Params p;
     p.outputs = {"ao", "irradiance"};
+    p.unseen_radiance_auto = false;
     p.unseen_radiance = 0.5;  // the fallback, through the marches' fill and the replay
     p.bounces = 2;
     p.vectorised = vectorised;

@@ -47,7 +47,7 @@ Vec3 at_elevation(double e) {  // a unit view-space normal e above the horizonta
 
 TEST(Unseen, AFrameOfGeometryEscapesNowhere) {
   const Frame f = frame(64, 36, 0);
-  const EscapeProfile p = escape_profile(f.v, f.cam);
+  const EscapeProfile p = escape_profile(f.v, f.cam, true);
   for (int b = 0; b < kBands; ++b) EXPECT_EQ(p.open[size_t(b)], 0.f) << b;
   const EscapeTable t(p);
   for (double e : {-1.5, -0.7, 0.0, 0.7, 1.5}) EXPECT_EQ(t.at(at_elevation(e)), 0.f) << e;
@@ -55,7 +55,7 @@ TEST(Unseen, AFrameOfGeometryEscapesNowhere) {
 
 TEST(Unseen, AFrameOfBackgroundEscapesEverywhere) {
   const Frame f = frame(64, 36, 36);
-  const EscapeProfile p = escape_profile(f.v, f.cam);
+  const EscapeProfile p = escape_profile(f.v, f.cam, true);
   for (int b = 0; b < kBands; ++b) EXPECT_FLOAT_EQ(p.open[size_t(b)], 1.f) << b;
   const EscapeTable t(p);
   for (double e : {-1.5, -0.7, 0.0, 0.7, 1.5}) EXPECT_NEAR(t.at(at_elevation(e)), 1.f, 1e-6) << e;
@@ -66,7 +66,7 @@ TEST(Unseen, AFrameOfBackgroundEscapesEverywhere) {
 // top and bottom bands' fractions.
 TEST(Unseen, AnOpenSkyAboveTheHorizonOpensTheUpperBands) {
   const Frame f = frame(64, 36, 18);
-  const EscapeProfile p = escape_profile(f.v, f.cam);
+  const EscapeProfile p = escape_profile(f.v, f.cam, true);
   for (int b = 0; b < kBands; ++b)
     EXPECT_FLOAT_EQ(p.open[size_t(b)], b >= kBands / 2 ? 1.f : 0.f) << b;
   // The frame reaches sin(elevation) ±0.33: bands 5 to 10.
@@ -97,16 +97,16 @@ TEST(Unseen, TheFillMapDimsTheFillByTheEscape) {
   const Vec3 up{0, -1, 0};  // a ground plane's normal
   const Frame f = frame(64, 36, 18, up);
   const Vec3 fill{0.2f, 0.4f, 0.8f};
-  const std::vector<Vec3> m = unseen_fill_map(f.v, escape_profile(f.v, f.cam), fill);
+  const std::vector<Vec3> m = unseen_fill_map(f.v, escape_profile(f.v, f.cam, true), fill);
   ASSERT_EQ(m.size(), f.v.pixels());
   EXPECT_EQ(m[0].x, 0.f);  // sky
   const size_t ground = f.v.pixels() - 1;
   EXPECT_NEAR(m[ground].x, 0.f, 1e-3);  // facing the open sky: almost nothing
   const Frame wall = frame(64, 36, 18, Vec3{0, 0, -1});
-  const std::vector<Vec3> mw = unseen_fill_map(wall.v, escape_profile(wall.v, wall.cam), fill);
+  const std::vector<Vec3> mw = unseen_fill_map(wall.v, escape_profile(wall.v, wall.cam, true), fill);
   EXPECT_NEAR(mw[ground].z, 0.5f * fill.z, 2e-3);  // a wall: half its hemisphere is sky
   const Frame room = frame(64, 36, 0, up);
-  const std::vector<Vec3> mr = unseen_fill_map(room.v, escape_profile(room.v, room.cam), fill);
+  const std::vector<Vec3> mr = unseen_fill_map(room.v, escape_profile(room.v, room.cam, true), fill);
   EXPECT_EQ(mr[ground].y, fill.y);  // enclosed: the whole fill
 }
 
@@ -121,7 +121,7 @@ TEST(Unseen, NonFiniteInputsStayInTheTables) {
   EXPECT_GT(t.at(Vec3{0, 1, 0}), 0.f);
   Frame f = frame(16, 9, 4);
   f.cam.fx = f.cam.fy = 0;
-  const EscapeProfile none = escape_profile(f.v, f.cam);
+  const EscapeProfile none = escape_profile(f.v, f.cam, true);
   for (int b = 0; b < kBands; ++b) EXPECT_EQ(none.open[size_t(b)], 0.f) << b;
 }
 

@@ -120,10 +120,13 @@ void info(const std::string& path, const ParamOptions& po) {
                 << " x the mean DiffCol x DiffDir + Emit of the frame's geometry)\n";
       // What escapes, from the frame's background (unseen.h), over the hemisphere of a normal
       // facing up, the camera (level) and down.
-      const EscapeTable escape(escape_profile(v, c));
-      std::cout << "  escape over a normal's hemisphere (each pixel's fill: auto x (1 - it)): up "
-                << escape.at(Vec3{0, -1, 0}) << ", level " << escape.at(Vec3{0, 0, -1}) << ", down "
-                << escape.at(Vec3{0, 1, 0}) << "\n";
+      const EscapeTable escape(escape_profile(v, c, p.unseen_carry));
+      std::cout << "  escape over a normal's hemisphere (each pixel's fill: auto x (1 - it); the "
+                << (p.unseen_carry ? "elevations the frame does not show as open as its top and "
+                                     "bottom"
+                                   : "elevations the frame does not show escape")
+                << "): up " << escape.at(Vec3{0, -1, 0}) << ", level " << escape.at(Vec3{0, 0, -1})
+                << ", down " << escape.at(Vec3{0, 1, 0}) << "\n";
     } catch (const Error& e) {
       std::cout << "not available: " << e.what() << "\n";
     }

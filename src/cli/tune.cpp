@@ -78,7 +78,8 @@ void add_tune(CLI::App& app) {
       ->check(amount_check("a number of decibels >= 0"));
   cmd->add_option("--keys", o->keys,
                   "k1,k2,...: search only these keys (of method, slices, steps, gather_steps, "
-                  "gather_radius, thickness, gather_thickness; default: all)")
+                  "gather_radius, thickness, gather_thickness, unseen_radiance, unseen_carry; "
+                  "default: all)")
       ->allow_extra_args(false);
   o->params.add_to(*cmd);
   cmd->callback([o] { tune(*o); });

@@ -131,7 +131,7 @@ HorizonImage search_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& 
   std::vector<Vec3> fill_map;
   if (gather) c.fill = Vec3{u, u, u};
   if (gather && p.unseen_radiance_auto) {
-    const EscapeProfile escape = escape_profile(v, cam);
+    const EscapeProfile escape = escape_profile(v, cam, p.unseen_carry);
     c.fill = mean_direct_radiance(v, g) * kAutoUnseen;
     if (cached) {
       c.fill = c.fill * (1.f - EscapeTable(escape).at(Vec3{0, 0, -1}));

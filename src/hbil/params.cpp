@@ -88,8 +88,14 @@ const std::vector<ParamInfo>& params_table() {
       {"unseen_radiance", &Params::unseen_radiance, 0, 1e6, "radiance",
        "the radiance assumed in the directions where the gather finds no surface: none within "
        "gather_radius, or the screen edge first (light from what the frame does not show); "
-       "\"auto\": 0.8 x the frame's mean direct outgoing radiance, DiffCol x DiffDir + Emit "
-       "over its geometry (for enclosed scenes: presets/interior.json); 0: none"},
+       "\"auto\" (default): 0.8 x the frame's mean direct outgoing radiance, DiffCol x "
+       "DiffDir + Emit over its geometry, times the fraction of each pixel's hemisphere that "
+       "the frame's background does not show escaping; 0: none"},
+      {"unseen_carry", &Params::unseen_carry, 0, 1, "bool",
+       "unseen_radiance \"auto\": the elevations above and below what the frame shows are "
+       "taken to be as open as the frame's top and bottom (true: for enclosed shots, "
+       "presets/interior.json); false (default): they escape, so that a frame says nothing of "
+       "what it does not reach"},
       {"bounces", &Params::bounces, 1, 16, "count",
        "in-frame bounces of indirect light: bounce k gathers the outgoing radiance of bounce k-1"},
       {"ao_multibounce", &Params::ao_multibounce, 0, 1, "bool",

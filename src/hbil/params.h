@@ -58,7 +58,10 @@ struct Params {
   // outgoing radiance (ao_frame.h), times what does not escape over each pixel's hemisphere
   // (unseen.h).
   double unseen_radiance = 0.0;
-  bool unseen_radiance_auto = false;
+  bool unseen_radiance_auto = true;
+  // "auto": the elevations the frame does not reach escape (false), or are as open as the
+  // nearest one it does (true: enclosed shots, presets/interior.json).
+  bool unseen_carry = false;
   std::string environment;  // far field: "" (off), equirect EXR path, or "rgb:r,g,b"
   // A frame pattern of panoramic G-buffers from each frame's camera position (Position,
   // DiffCol, DiffDir, Emit, Depth), whose off-screen part lights the gather's empty

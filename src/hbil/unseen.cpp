@@ -20,7 +20,7 @@ int band_of(double sin_elevation) {
 
 }  // namespace
 
-EscapeProfile escape_profile(const ViewGBuffer& v, const Camera& cam) {
+EscapeProfile escape_profile(const ViewGBuffer& v, const Camera& cam, bool carry) {
   struct Sums {
     std::array<double, kBands> all{}, open{};
   };
@@ -63,13 +63,21 @@ EscapeProfile escape_profile(const ViewGBuffer& v, const Camera& cam) {
     lo = std::min(lo, b);
     hi = std::max(hi, b);
   }
-  if (hi < 0) return p;  // nothing seen: nothing escapes
+  if (hi < 0) {  // nothing seen: every band escapes, or with carry none
+    p.open.fill(carry ? 0.f : 1.f);
+    return p;
+  }
   p.lowest_seen = lo;
   p.highest_seen = hi;
   for (int b = 0; b < kBands; ++b) {
     if (seen[size_t(b)]) continue;
-    // Above the frame the top band's fraction, below it the bottom band's; a band inside
-    // the frame's range with too little of it takes the nearest seen band below.
+    // Beyond the frame: open, or with carry the top band's fraction above it and the bottom
+    // band's below it. A band inside the frame's range with too little of it takes the
+    // nearest seen band below.
+    if (!carry && (b > hi || b < lo)) {
+      p.open[size_t(b)] = 1.f;
+      continue;
+    }
     int from = b > hi ? hi : lo;
     if (b > lo && b < hi)
       for (from = b - 1; !seen[size_t(from)]; --from) {

@@ -5,15 +5,17 @@
 // light Cycles and POV-Ray count as direct). Which, the G-buffer says only for the
 // directions the camera sees: its background pixels are lines of sight that escape. "auto"
 // takes the frame's escape fraction per band of elevation (the angle above the image's
-// horizontal, in view space) and carries the top band's fraction up to the zenith and the
-// bottom band's down to the nadir: an open sky at the top of the frame stays open above
-// it, a ceiling stays closed. A pixel with normal n then sees, in its empty directions,
+// horizontal, in view space). The bands the frame does not reach say nothing, so they
+// escape; or, for enclosed shots (unseen_carry), the top band's fraction is carried up to
+// the zenith and the bottom band's down to the nadir: an open sky at the top of the frame
+// stays open above it, a ceiling stays closed. A pixel with normal n then sees, in its
+// empty directions,
 //
 //   fill(n) = kAutoUnseen x (mean direct outgoing radiance of the frame's geometry)
 //             x (1 − the cosine-weighted escape fraction over n's hemisphere),
 //
-// so that an enclosed room keeps the former constant and a ground plane under open sky gets
-// almost nothing.
+// so that a ground plane under open sky gets almost nothing, and a room whose walls the frame
+// shows gets the whole fill for the elevations it shows (all of them with unseen_carry).
 #pragma once
 
 #include <array>
@@ -26,16 +28,16 @@
 namespace hbil {
 
 // The fraction of lines of sight that escape (background pixels), per band of
-// sin(elevation) over [-1, 1] (band 0 looks straight down, kBands - 1 straight up), with
-// the bands the frame does not reach carried from its top and bottom bands. Each pixel
-// counts with its solid angle. A frame without pixels escapes nowhere.
+// sin(elevation) over [-1, 1] (band 0 looks straight down, kBands - 1 straight up). The
+// bands the frame does not reach escape (1), or with `carry` take its top and bottom bands'
+// fractions. Each pixel counts with its solid angle. A frame without pixels reaches no band.
 struct EscapeProfile {
   static constexpr int kBands = 16;
   std::array<float, kBands> open{};
   int lowest_seen = 0, highest_seen = 0;  // the bands the frame reaches
 };
 // `v`: the full-resolution view G-buffer, `cam` its camera (raster = v's pixel grid).
-EscapeProfile escape_profile(const ViewGBuffer& v, const Camera& cam);
+EscapeProfile escape_profile(const ViewGBuffer& v, const Camera& cam, bool carry);
 
 // The cosine-weighted escape fraction over the hemisphere of a unit view-space normal n
 // (it depends only on n's elevation: kTable entries over sin(elevation), interpolated).

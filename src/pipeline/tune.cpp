@@ -36,6 +36,7 @@ std::vector<TuneAxis> default_tune_axes(const Params& r) {
       // What the gather's empty directions see (a statement about the shot's surroundings,
       // which the reference can make): none, or the frame's escape-dimmed estimate.
       {"unseen_radiance", {"0", "auto"}},
+      {"unseen_carry", {"false", "true"}},
   };
   return axes;
 }
@@ -102,12 +103,12 @@ TuneResult run_tune(const TuneSettings& s,
     Params cur = start;
     ConfigResult best = measure(cur, "base");
     std::vector<TuneAxis> axes;
-    // unseen_radiance changes only the gathered layers.
+    // unseen_radiance and unseen_carry change only the gathered layers.
     const bool gathered = judged->layer == "irradiance" || judged->layer == "indirect" ||
                           judged->layer == "composite";
     for (const TuneAxis& a : default_tune_axes(resolved))
       if ((s.keys.empty() || std::find(s.keys.begin(), s.keys.end(), a.key) != s.keys.end()) &&
-          (gathered || a.key != "unseen_radiance"))
+          (gathered || (a.key != "unseen_radiance" && a.key != "unseen_carry")))
         axes.push_back(a);
     for (int pass = 0; pass < s.max_passes; ++pass) {
       bool changed = false;
