@@ -74,6 +74,27 @@ TEST(Unseen, AnOpenSkyAboveTheHorizonOpensTheUpperBands) {
   EXPECT_EQ(p.highest_seen, 10);
 }
 
+// By default (no carry) the bands the frame does not reach escape: a frame of geometry
+// closes only the bands it shows (5 to 10 here, sin(elevation) −0.375 to 0.375).
+TEST(Unseen, WithoutCarryTheBandsBeyondTheFrameEscape) {
+  const Frame f = frame(64, 36, 0);
+  const EscapeProfile p = escape_profile(f.v, f.cam, false);
+  EXPECT_EQ(p.lowest_seen, 5);
+  EXPECT_EQ(p.highest_seen, 10);
+  for (int b = 0; b < kBands; ++b) EXPECT_EQ(p.open[size_t(b)], b >= 5 && b <= 10 ? 0.f : 1.f) << b;
+  // Facing up, the hemisphere's cosine weight above sin(elevation) s is 1 − s²: the bands
+  // from 11 (s = 6/16 · 2 − 1 = 0.375) up escape, 1 − 0.375²; facing down the same below −0.375.
+  const EscapeTable t(p);
+  EXPECT_NEAR(t.at(at_elevation(std::numbers::pi / 2)), 1 - 0.375 * 0.375, 2e-3);
+  EXPECT_NEAR(t.at(at_elevation(-std::numbers::pi / 2)), 1 - 0.375 * 0.375, 2e-3);
+  // With carry the same frame escapes nowhere; a frame that shows nothing escapes everywhere
+  // without it and nowhere with it.
+  for (float o : escape_profile(f.v, f.cam, true).open) EXPECT_EQ(o, 0.f);
+  Frame none = frame(16, 9, 4);
+  none.cam.fx = none.cam.fy = 0;
+  for (float o : escape_profile(none.v, none.cam, false).open) EXPECT_EQ(o, 1.f);
+}
+
 // Under an open upper half-space, the cosine-weighted fraction of a hemisphere above the
 // horizontal is the sky view factor of a plane tilted from the zenith: (1 + sin e) / 2 for
 // a normal at elevation e.
@@ -103,10 +124,12 @@ TEST(Unseen, TheFillMapDimsTheFillByTheEscape) {
   const size_t ground = f.v.pixels() - 1;
   EXPECT_NEAR(m[ground].x, 0.f, 1e-3);  // facing the open sky: almost nothing
   const Frame wall = frame(64, 36, 18, Vec3{0, 0, -1});
-  const std::vector<Vec3> mw = unseen_fill_map(wall.v, escape_profile(wall.v, wall.cam, true), fill);
+  const std::vector<Vec3> mw =
+      unseen_fill_map(wall.v, escape_profile(wall.v, wall.cam, true), fill);
   EXPECT_NEAR(mw[ground].z, 0.5f * fill.z, 2e-3);  // a wall: half its hemisphere is sky
   const Frame room = frame(64, 36, 0, up);
-  const std::vector<Vec3> mr = unseen_fill_map(room.v, escape_profile(room.v, room.cam, true), fill);
+  const std::vector<Vec3> mr =
+      unseen_fill_map(room.v, escape_profile(room.v, room.cam, true), fill);
   EXPECT_EQ(mr[ground].y, fill.y);  // enclosed: the whole fill
 }
 
