@@ -10,8 +10,9 @@
 #   HELDOUT_MOVE=dir HELDOUT_CUT=dir bench/tables.sh   also the temporal chain on the camera
 #       moves of samples/blender/study_shots.py (--shot move, frames 1-16; --shot cut, 1-12)
 #   ONLY_POVRAY=1 bench/tables.sh              only the POV-Ray tables
-#   ONLY_UNSEEN=1 bench/tables.sh              only the unseen_radiance table (default against
-#       presets/interior.json); UNSEEN="dir..." adds scenes rendered with samples/blender/*.py
+#   ONLY_UNSEEN=1 bench/tables.sh              only the unseen_radiance table (0, the default
+#       "auto", presets/interior.json; fast with 0 and auto); UNSEEN="dir..." adds scenes
+#       rendered with samples/blender/*.py
 #       (frames with Combined and DiffCol*DiffInd of the 8-bounce render)
 #   HELDOUT_POV=/tmp/pov_study bench/tables.sh   also the held-out POV-Ray scene
 #       (samples/povray/study.pov, rendered as its header says); HELDOUT_POV_NOSKY=dir adds
@@ -40,11 +41,14 @@ preset() { echo "$2" > "$presets/$1.json"; echo "$presets/$1.json"; }
 single=$(preset single '{"temporal": false}')
 temporal=$(preset temporal '{}')
 
-# b NAME SHOT [bench options...]: one bench into $out/NAME.
+# b NAME SHOT [bench options...]: one bench into $out/NAME. The tables measure the
+# screen-space gather alone (unseen_radiance 0), except the unseen_radiance table, whose
+# configurations set it (gather_only=() there).
+gather_only=(--set unseen_radiance=0)
 b() {
   local name=$1 shot=$2
   shift 2
-  "$hbil" bench "$shot" -o "$out/$name" -q --runs "$runs" "$@" > /dev/null
+  "$hbil" bench "$shot" -o "$out/$name" -q --runs "$runs" "${gather_only[@]}" "$@" > /dev/null
 }
 rows() { python3 bench/tables.py "$out/$1" "${@:2}"; }
 load() { echo "(machine: $(nproc) cores, load $(cut -d' ' -f1-3 /proc/loadavg))"; }
@@ -112,12 +116,14 @@ povray_table() {
       --ref-layer 'DiffCol*DiffInd' --json | python3 -c 'import json,sys
 o=json.load(sys.stdin)["overall"]; print("%.4f / %+.4f / %.2f" % (o["rmse"], o["mean_error"], o["psnr"]))')"
 }
-# unseen_table: the default and fast presets without and with unseen_radiance "auto"
-# (presets/interior.json), temporal chain, on the two samples, the POV-Ray room and every
-# folder of $UNSEEN.
+# unseen_table: the default and fast presets with unseen_radiance 0, "auto" (their default)
+# and, for the default, auto with unseen_carry (presets/interior.json), temporal chain, on the
+# two samples, the POV-Ray room and every folder of $UNSEEN.
 unseen_table() {
+  local gather_only=()
   echo
-  echo "unseen_radiance: 0 (default, fast) against \"auto\" (interior, fast + auto), temporal"
+  echo "unseen_radiance 0 against \"auto\" (the default: the elevations the frame does not show"
+  echo "escape) and auto with unseen_carry (interior), for the default and fast presets, temporal"
   echo "chain, indirect against the full-GI render's DiffCol*DiffInd, composite against its"
   echo "Combined $(load):"
   echo
@@ -130,9 +136,13 @@ unseen_table() {
     name=$(basename "$dir")
     [ "$dir" = "$out/povu" ] && name="povray_room"
     b "unseen-$name" "$in" --ref "indirect=$in:DiffCol*DiffInd" --ref "composite=$in:Combined" \
-      --preset presets/default.json --preset presets/interior.json --preset presets/fast.json \
-      --preset "$(preset fast_interior '{"method": "horizon", "slices": 1, "steps": 4, "unseen_radiance": "auto"}')"
-    rows "unseen-$name" --prefix "$name" --label "fast_interior=fast + unseen_radiance auto" \
+      --preset "$(preset off '{"unseen_radiance": 0}')" --preset presets/default.json \
+      --preset presets/interior.json \
+      --preset "$(preset fast_off '{"method": "horizon", "slices": 1, "steps": 4, "unseen_radiance": 0}')" \
+      --preset presets/fast.json
+    rows "unseen-$name" --prefix "$name" --label "off=unseen_radiance 0" \
+      --label "default=default (auto)" --label "interior=interior (auto, unseen_carry)" \
+      --label "fast_off=fast, unseen_radiance 0" --label "fast=fast (auto)" \
       indirect:rmp composite:rmp s
   done
 }
