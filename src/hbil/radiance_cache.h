@@ -1,8 +1,8 @@
 // radiance_cache.h: light from surfaces earlier frames showed and this one does not.
 //
 // Screen space finds no surface in the directions that leave the frame, and the gather lights
-// them with unseen_radiance (HorizonConfig::fill), zero by default. Over a camera move the
-// surfaces there were often on screen a few frames before: a pan away from a lit wall still
+// them with unseen_radiance (HorizonConfig::fill; "auto" by default, unseen.h). Over a camera move
+// the surfaces there were often on screen a few frames before: a pan away from a lit wall still
 // receives its light. The cache keeps what the frames of a run showed, in world space, and
 // gives each pixel of a later frame the radiance of its off-screen directions (HBIL §4's
 // "off-screen buffer", kept in world space instead of a paraboloid of the current view).
@@ -43,8 +43,9 @@
 // geometry pixels with their world position and DiffCol x (DiffDir + A) + Emit, A its
 // panorama_ambient, for that frame alone. Unlike the frames' entries, its entries and texels
 // inside the frustum count too: it knows what lies beyond gather_radius there. Its
-// background is left unknown, so it takes the fallback (0 by default: the sky's light is in
-// DiffDir). Then the first frame of a run and single frames have a fill too.
+// background is left unknown, so it takes the fallback (unseen_radiance; with "auto" the fill
+// of a level normal; 0 leaves the sky dark, its light being in DiffDir). Then the first frame
+// of a run and single frames have a fill too.
 //
 // With an empty cache (a run's first frame, the frame after a cut, single frames) and on a
 // static camera (nothing outside the frustum is known) the fill is the fallback everywhere:
