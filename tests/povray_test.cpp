@@ -217,6 +217,10 @@ TEST(PovrayImport, CameraFileErrorsNameTheFileAndKey) {
   for (auto& v : huge["up"]) v = v.get<double>() * 1e-150;
   test::expect_error([&] { io::read_povray_camera(write(huge)); }, Exit::camera,
                      {"camera1.json", "out of range"});
+  nlohmann::json far = j;
+  far["location"] = {1e300, 0.0, 0.0};
+  test::expect_error([&] { io::read_povray_camera(write(far)); }, Exit::camera,
+                     {"camera1.json", "\"location\" is out of range"});
   // "format" given twice, the second a number: the last counts, and a number was read as a
   // string, an escaping exception (found by tests/fuzz/fuzz_povray).
   std::string text = j.dump();

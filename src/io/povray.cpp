@@ -120,6 +120,9 @@ PovrayCamera read_povray_camera(const std::string& path) {
     c.guard_y = g[1].get<int>();
   }
   if (!(c.depth_range > 0)) camera_file_error(path, "key \"depth_range\" must be > 0");
+  // Squared (as lengths are) without overflowing a double: the camera centre stays finite.
+  if (!std::isfinite(dot(c.location, c.location)))
+    camera_file_error(path, "key \"location\" is out of range");
   const double ld = length(c.direction), lr = length(c.right), lu = length(c.up);
   if (!(ld > 0 && lr > 0 && lu > 0))
     camera_file_error(path, "\"direction\", \"right\" and \"up\" must not be zero");
