@@ -375,24 +375,22 @@ TEST(Tune, KeysLimitTheSearch) {
 TEST(Tune, ChoosesUnseenRadianceWhereTheReferenceShowsIt) {
   test::TempDir dir(test::test_name());
   const std::string in = test::kRoomPoles + "/frame_####.exr";
-  const auto t = test::run_hbil(
-      "tune " + test::q(in) + " --frames 1 --ref " + test::q("composite=" + in + ":Combined") +
-          " --keys unseen_radiance,unseen_carry -o " + test::q(dir / "t.json"),
-      dir.path());
-  ASSERT_EQ(t.code, 0) << t.err;
-  EXPECT_TRUE(contains(t.err, "tune: unseen_radiance=0")) << t.err;
-  std::ifstream f(dir / "t.json");
-  const nlohmann::json j = nlohmann::json::parse(f);
+  // tune on frame 1 with one reference, over the two keys: its stderr and the preset written.
+  auto tune = [&](const std::string& ref, const std::string& out) {
+    const auto r =
+        test::run_hbil("tune " + test::q(in) + " --frames 1 --ref " + test::q(ref) +
+                           " --keys unseen_radiance,unseen_carry -o " + test::q(dir / out),
+                       dir.path());
+    EXPECT_EQ(r.code, 0) << r.err;
+    std::ifstream f(dir / out);
+    return std::pair{r.err, nlohmann::json::parse(f, nullptr, false)};
+  };
+  const auto [err, j] = tune("composite=" + in + ":Combined", "t.json");
+  EXPECT_TRUE(contains(err, "tune: unseen_radiance=0")) << err;
   EXPECT_EQ(j["unseen_radiance"], "auto");
   EXPECT_EQ(j["unseen_carry"], true);
-  const auto a =
-      test::run_hbil("tune " + test::q(in) + " --frames 1 --ref " + test::q("ao=" + in + ":AO") +
-                         " --keys unseen_radiance,unseen_carry -o " + test::q(dir / "a.json"),
-                     dir.path());
-  ASSERT_EQ(a.code, 0) << a.err;
-  EXPECT_FALSE(contains(a.err, "tune: unseen_")) << a.err;
-  std::ifstream af(dir / "a.json");
-  const nlohmann::json aj = nlohmann::json::parse(af);
+  const auto [ao_err, aj] = tune("ao=" + in + ":AO", "a.json");
+  EXPECT_FALSE(contains(ao_err, "tune: unseen_")) << ao_err;
   EXPECT_EQ(aj["unseen_radiance"], "auto");
   EXPECT_EQ(aj["unseen_carry"], false);
 }
