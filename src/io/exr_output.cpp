@@ -16,6 +16,7 @@
 
 #include "hbil/error.h"
 #include "io/camera_io.h"
+#include "io/exr_rle.h"
 
 namespace hbil::io {
 
@@ -139,16 +140,26 @@ std::string write_temporary(const std::string& final_path, const AoFrame& f,
     spec.attribute(name, a.type(), a.data());
   }
   spec.attribute("Software", "hbil " HBIL_VERSION);
-  spec.attribute("compression", p.compression);
+  // RLE is compressed by hbil (io/exr_rle.h): OpenEXR writes the frame uncompressed into it.
+  const bool own_rle = p.compression == "rle";
+  spec.attribute("compression", own_rle ? std::string("none") : p.compression);
   spec.attribute("hbil:version", HBIL_VERSION);
   spec.attribute("hbil:preset", to_json(p).dump());
   spec.attribute("hbil:camera", camera_json(cam));
   if (!job.empty()) spec.attribute("hbil:job", job);
   set_camera_attributes(spec, cam);
 
+  // Declared before the writer, so that a writer destroyed on an error never writes to a
+  // proxy already gone.
+  std::optional<RleExrWriter> rle;
   auto out = OIIO::ImageOutput::create(tmp.path());
   if (!out)
     throw Error(Exit::output, final_path + ": cannot create an EXR writer: " + OIIO::geterror());
+  if (own_rle) {
+    rle.emplace(tmp.path());
+    if (!out->set_ioproxy(&*rle))
+      throw Error(Exit::output, final_path + ": cannot create an EXR writer: " + out->geterror());
+  }
   // Written in strips of rows, so that no second copy of the whole frame is made.
   constexpr int kStrip = 64;
   // Each strip is packed in the file's own channel formats (native data: no conversion in
@@ -178,9 +189,14 @@ std::string write_temporary(const std::string& final_path, const AoFrame& f,
     ok = out->write_scanlines(spec.y + y0, spec.y + y1, 0, OIIO::TypeUnknown, strip.data());
   }
   if (!ok || !out->close()) {
-    throw Error(Exit::output, final_path + ": cannot write: " + out->geterror());
+    const std::string why = rle && !rle->why().empty() ? rle->why() : out->geterror();
+    throw Error(Exit::output, final_path + ": cannot write: " + why);
   }
   out.reset();
+  if (rle) {
+    rle->close();
+    if (!rle->complete()) throw Error(Exit::output, final_path + ": cannot write: " + rle->why());
+  }
   return tmp.keep();
 }
 
