@@ -14,6 +14,8 @@
 #include <mutex>
 #include <new>
 #include <stdexcept>
+
+#include "io/half_rows.h"
 #ifdef __SSE2__
 #include <emmintrin.h>
 #endif
@@ -87,14 +89,8 @@ void convert(const Bytes& bytes, size_t line_bytes, size_t width, size_t row0, s
         continue;
       }
       float* out = p.target->dst + (row0 + r) * width * stride;  // no float target when kept
-      if (bytes.split && p.type == Imf::HALF) {                  // the common case, unrolled
-        const unsigned char* lo = bytes.lo + j0 / 2;
-        const unsigned char* hi = bytes.hi + j0 / 2;
-        for (size_t x = 0; x < width; ++x) {
-          Imath::half h;
-          h.setBits(uint16_t(lo[x] | hi[x] << 8));
-          out[x * stride] = float(h);
-        }
+      if (bytes.split && p.type == Imf::HALF) {                  // the common case, eight at a time
+        split_halves_to_floats(bytes.lo + j0 / 2, bytes.hi + j0 / 2, width, out, stride);
       } else {
         for (size_t x = 0; x < width; ++x)
           out[x * stride] = to_float(bytes.sample(j0 + x * size, size), p.type);

@@ -17,6 +17,7 @@
 #include "hbil/error.h"
 #include "io/camera_io.h"
 #include "io/exr_rle.h"
+#include "io/half_rows.h"
 
 namespace hbil::io {
 
@@ -59,8 +60,11 @@ size_t pixel_bytes(const std::vector<OutputChannel>& plan) {
   return n;
 }
 
-std::optional<NonFinite> output_rows(const std::vector<OutputChannel>& plan, int width, int y0,
-                                     int y1, unsigned char* dst) {
+namespace {
+
+// output_rows one value at a time, where a row holds a non-finite value.
+std::optional<NonFinite> output_rows_checked(const std::vector<OutputChannel>& plan, int width,
+                                             int y0, int y1, unsigned char* dst) {
   const size_t stride = pixel_bytes(plan), first = size_t(y0) * width, n = size_t(y1 - y0) * width;
   constexpr float kHalfMax = 65504.f;  // HALF_MAX: the largest finite half
   std::optional<NonFinite> bad;
@@ -82,6 +86,42 @@ std::optional<NonFinite> output_rows(const std::vector<OutputChannel>& plan, int
     offset += c.half ? 2 : 4;
   }
   return bad;
+}
+
+}  // namespace
+
+std::optional<NonFinite> output_rows(const std::vector<OutputChannel>& plan, int width, int y0,
+                                     int y1, unsigned char* dst) {
+  // Each channel converted as a whole (half_rows.h), then packed; where a value is not
+  // finite, the rows again one value at a time, which finds the first.
+  const size_t stride = pixel_bytes(plan), first = size_t(y0) * width, n = size_t(y1 - y0) * width;
+  thread_local std::vector<std::uint16_t> halves;
+  size_t offset = 0;
+  bool finite = true;
+  for (const OutputChannel& c : plan) {
+    unsigned char* out = dst + offset;
+    if (c.half) {
+      halves.resize(n);
+      if (c.src)
+        finite &= floats_to_half_bits(c.src + first * c.stride, c.stride, n, halves.data());
+      else
+        std::fill(halves.begin(), halves.end(), Imath::half(1.f).bits());
+      for (size_t i = 0; i < n; ++i, out += stride) std::memcpy(out, &halves[i], 2);
+    } else {
+      std::uint32_t special = 0;  // exponent bits all set: an infinity or a NaN
+      for (size_t i = 0; i < n; ++i, out += stride) {
+        const float v = c.src ? c.src[(first + i) * c.stride] : 1.f;
+        std::uint32_t bits;
+        std::memcpy(&bits, &v, 4);
+        special |= std::uint32_t((bits & 0x7f800000u) == 0x7f800000u);
+        std::memcpy(out, &v, 4);
+      }
+      finite &= special == 0;
+    }
+    offset += c.half ? 2 : 4;
+  }
+  if (finite) return std::nullopt;
+  return output_rows_checked(plan, width, y0, y1, dst);
 }
 
 std::string camera_json(const Camera& c) {
