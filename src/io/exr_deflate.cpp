@@ -100,7 +100,9 @@ void convert(const Bytes& bytes, size_t line_bytes, size_t width, size_t row0, s
 
 // Undoes ZIP's predictor: byte i was stored as t[i] - t[i - 1] + 128 (mod 256), so the data
 // is the running sum of (stored - 128). With SSE2, 16 bytes at a time: a prefix sum within
-// the register in four shifted adds, plus the previous register's last byte.
+// the register in four shifted adds, plus the running sum so far (carry); the carry grows by
+// the register's own sum, taken from the prefix before the carry is added, so that one add a
+// register is all that waits on the one before.
 void undo_predictor(unsigned char* t, size_t n) {
   if (n == 0) return;
   size_t i = 1;
@@ -113,12 +115,12 @@ void undo_predictor(unsigned char* t, size_t n) {
     v = _mm_add_epi8(v, _mm_slli_si128(v, 2));
     v = _mm_add_epi8(v, _mm_slli_si128(v, 4));
     v = _mm_add_epi8(v, _mm_slli_si128(v, 8));
-    v = _mm_add_epi8(v, carry);
-    _mm_storeu_si128(reinterpret_cast<__m128i*>(t + i), v);
-    __m128i last = _mm_srli_epi16(v, 8);     // byte 15, as the low byte of word 7
-    last = _mm_shufflehi_epi16(last, 0xff);  // word 7 in all of the high half
-    last = _mm_unpackhi_epi64(last, last);   // and in the low half
-    carry = _mm_or_si128(last, _mm_slli_epi16(last, 8));
+    __m128i sum = _mm_srli_epi16(v, 8);    // byte 15 (the register's sum), low byte of word 7
+    sum = _mm_shufflehi_epi16(sum, 0xff);  // word 7 in all of the high half
+    sum = _mm_unpackhi_epi64(sum, sum);    // and in the low half
+    sum = _mm_or_si128(sum, _mm_slli_epi16(sum, 8));
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(t + i), _mm_add_epi8(v, carry));
+    carry = _mm_add_epi8(carry, sum);
   }
 #endif
   for (; i < n; ++i) t[i] = (unsigned char)(t[i - 1] + t[i] - 128);
