@@ -9,7 +9,8 @@
 #   PRESET=presets/interior.json   hbil's preset (default: none, the built-in defaults)
 #
 # Each dir holds a 1920x1080 sequence of the scene rendered as samples/README.md says
-# (`--size 1920x1080 --samples 1`, back faces merged, sidecars), frames 1-4. For every scene:
+# (`--size 1920x1080 --samples 1`, back faces merged, sidecars), frames 1-4 or more (the
+# README: room_poles 1-6, courtyard 1-8). For every scene:
 #  - Cycles renders frame 1 at 1920x1080 at each rung, seed 7, with full GI (`--mode main`)
 #    and with direct light only (`--bounces 0`); its time is `cycles.ViewLayer.render_time`
 #    from the EXR header (path tracing only), as in equal_error.sh;

@@ -1,8 +1,9 @@
 // exr_output.h: writing hbil's multi-layer EXR frames.
 //
-// One single-part scanline EXR per frame, compressed as the preset says (compression), colour
-// layers as half floats unless colour_half is false, data layers 32-bit float, channels named
-// <layer>.<chan> (ao.Y, bentcone.X/Y/Z/W). The input's header attributes are copied
+// One single-part scanline EXR per frame, compressed as the preset says (compression; RLE,
+// the default, by hbil itself: io/exr_rle.h), colour layers as half floats unless
+// colour_half is false, data layers 32-bit float, channels named <layer>.<chan> (ao.Y,
+// bentcone.X/Y/Z/W). The input's header attributes are copied
 // through; hbil adds hbil:version, hbil:preset (the effective parameters as JSON),
 // hbil:camera (the camera used, JSON), hbil:job (what the frame was made from, for
 // `run --skip-existing`) and the standard worldToCamera / worldToNDC.
