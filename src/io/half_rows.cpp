@@ -31,8 +31,9 @@ bool to_half_scalar(const float* in, size_t stride, size_t n, std::uint16_t* out
   bool finite = true;
   for (size_t k = 0; k < n; ++k) {
     const float v = in[k * stride];
-    finite &= std::isfinite(v);
-    out[k] = std::isfinite(v) ? Imath::half(std::clamp(v, -kHalfMax, kHalfMax)).bits() : 0;
+    const bool ok = std::isfinite(v);
+    finite &= ok;
+    out[k] = ok ? Imath::half(std::clamp(v, -kHalfMax, kHalfMax)).bits() : 0;
   }
   return finite;
 }
@@ -101,10 +102,6 @@ bool has_f16c() {
 const bool kVectorised = has_f16c();
 
 }  // namespace
-
-bool half_rows_vectorised() {
-  return kVectorised;
-}
 
 void split_halves_to_floats(const unsigned char* lo, const unsigned char* hi, size_t n, float* out,
                             size_t stride) {

@@ -10,9 +10,6 @@
 
 namespace hbil::io {
 
-// Whether the eight-at-a-time path is in use.
-bool half_rows_vectorised();
-
 // The n halves whose low bytes are lo[0..n) and high bytes hi[0..n) (as ZIP's split stores
 // them), as floats at out[k * stride].
 void split_halves_to_floats(const unsigned char* lo, const unsigned char* hi, size_t n, float* out,
