@@ -170,13 +170,17 @@ Reprojected reproject_gather(const ViewGBuffer& prev, const Camera& prev_cam,
   // The current view space to the previous one in one rigid motion: v' = M v + m.
   const Mat3d M = prev_cam.R * cur_cam.R.transposed();
   const Vec3d m = prev_cam.t - M * cur_cam.t;
-  // The temporal chain's channel counts get a loop of fixed length (9: its history; 21: with
-  // history_window); any other count the general one.
+  // The temporal chain's channel counts get a loop of fixed length (9: its history, 6 without
+  // irradiance; 21 and 12: with history_window); any other count the general one.
   tbb::parallel_for(0, cur.height, [&](int y) {
     if (channels == 9)
       gather_row<9>(prev, prev_value, channels, cur, motion, M, m, tol, y, r);
+    else if (channels == 6)
+      gather_row<6>(prev, prev_value, channels, cur, motion, M, m, tol, y, r);
     else if (channels == 21)
       gather_row<21>(prev, prev_value, channels, cur, motion, M, m, tol, y, r);
+    else if (channels == 12)
+      gather_row<12>(prev, prev_value, channels, cur, motion, M, m, tol, y, r);
     else
       gather_row<0>(prev, prev_value, channels, cur, motion, M, m, tol, y, r);
   });

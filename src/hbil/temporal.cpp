@@ -126,7 +126,10 @@ AoFrame TemporalChain::run(const GBuffer& g, GBuffer* release, const Camera& cam
   // With history_window, two chains of kChannels each (window_weight), then the frame's own
   // irradiance before accumulation, which is what is fed back.
   const int window = p_.history_window, chains = window > 0 ? 2 : 1;
-  const int channels = kChannels * chains + (window > 0 ? 3 : 0);
+  const bool gather = gathers(p_);
+  const int ne = gather ? kIrradianceChannels : 0;  // a chain's irradiance channels, first
+  const int per_chain = ne + kOcclusionChannels;
+  const int channels = per_chain * chains + (window > 0 ? ne : 0);
   Reprojected r;
   bool history = has_history_ && !cut;
   if (history) {
@@ -157,7 +160,6 @@ AoFrame TemporalChain::run(const GBuffer& g, GBuffer* release, const Camera& cam
   std::vector<float>().swap(data_);
   view_ = ViewGBuffer{};
   if (!history) r = Reprojected{};
-  const bool gather = gathers(p_);
   // The radiance cache holds the frames since the last cut (a cut may be another set).
   const bool cache = p_.radiance_cache > 0 && gather;
   if (cut || rep.first) cache_.clear();
@@ -173,7 +175,7 @@ AoFrame TemporalChain::run(const GBuffer& g, GBuffer* release, const Camera& cam
     std::vector<float> e(3 * n_px), depth(n_px);
     // The history's accumulated irradiance; with history_window its frame's own, so that
     // what is fed back forgets a cut-off past by a bounce per frame, not through the means.
-    const size_t e_at = window > 0 ? size_t(kChannels) * chains : 0;
+    const size_t e_at = window > 0 ? size_t(per_chain) * chains : 0;
     for (size_t i = 0; i < n_px; ++i) {
       for (int c = 0; c < 3; ++c) e[3 * i + c] = r.value[size_t(channels) * i + e_at + c];
       depth[i] = v.is_background(i) ? float(kBackgroundLimit) * 10 : v.position[i].z;
@@ -219,39 +221,40 @@ AoFrame TemporalChain::run(const GBuffer& g, GBuffer* release, const Camera& cam
       const Vec3 e_cur = has_e ? h.irradiance[i] : Vec3{};
       const float ao_cur = h.ao[i], vis_cur = h.vis[i];
       const Vec3 b_cur = h.bent[i];
-      if (window > 0) {
-        float* o = &next[size_t(channels) * i + size_t(kChannels) * chains];
+      if (window > 0 && ne > 0) {
+        float* o = &next[size_t(channels) * i + size_t(per_chain) * chains];
         o[0] = e_cur.x, o[1] = e_cur.y, o[2] = e_cur.z;
       }
       Vec3 e_sum, b_sum;
       float ao_sum = 0, vis_sum = 0, n_sum = 0;
       for (int k = 0; k < chains; ++k) {
-        float* o = &next[size_t(channels) * i + size_t(kChannels) * k];
+        float* e_ch = &next[size_t(channels) * i + size_t(per_chain) * k];
+        float* o = e_ch + ne;  // ao, vis, bent (3), n
         Vec3 e = e_cur, b = b_cur;
         float ao = ao_cur, vis = vis_cur, n = 1;
         if (history && r.valid[i] && !restart[k]) {
           const float* hv = o;
           float a;
           if (window > 0) {
-            n = hv[8] + 1.f;
+            n = hv[5] + 1.f;
             a = 1.f / n;
           } else {
-            n = std::min(hv[8] + 1.f, float(p_.history_max));
+            n = std::min(hv[5] + 1.f, float(p_.history_max));
             a = std::max(1.f / n, 1.f - float(p_.history_weight));
           }
           auto mix = [a](float old, float cur) { return old + a * (cur - old); };
-          if (has_e) e = Vec3{mix(hv[0], e.x), mix(hv[1], e.y), mix(hv[2], e.z)};
-          ao = mix(hv[3], ao);
-          vis = mix(hv[4], vis);
-          const Vec3 b_old = Vec3(cam.world_dir_to_view(Vec3d(Vec3{hv[5], hv[6], hv[7]})));
+          if (has_e && ne > 0) e = Vec3{mix(e_ch[0], e.x), mix(e_ch[1], e.y), mix(e_ch[2], e.z)};
+          ao = mix(hv[0], ao);
+          vis = mix(hv[1], vis);
+          const Vec3 b_old = Vec3(cam.world_dir_to_view(Vec3d(Vec3{hv[2], hv[3], hv[4]})));
           b = Vec3{mix(b_old.x, b.x), mix(b_old.y, b.y), mix(b_old.z, b.z)};
         }
-        if (has_e) o[0] = e.x, o[1] = e.y, o[2] = e.z;
-        o[3] = ao;
-        o[4] = vis;
+        if (has_e && ne > 0) e_ch[0] = e.x, e_ch[1] = e.y, e_ch[2] = e.z;
+        o[0] = ao;
+        o[1] = vis;
         const Vec3 bw = Vec3(cam.view_dir_to_world(Vec3d(b)));
-        o[5] = bw.x, o[6] = bw.y, o[7] = bw.z;
-        o[8] = n;
+        o[2] = bw.x, o[3] = bw.y, o[4] = bw.z;
+        o[5] = n;
         if (chains == 1) {
           e_sum = e, b_sum = b, ao_sum = ao, vis_sum = vis, n_sum = n;
         } else {

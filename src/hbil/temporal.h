@@ -81,9 +81,12 @@ class TemporalChain {
     cache_.set_panorama(pano, float(p_.background_depth), frame);
   }
 
-  // Per-pixel history channels: irradiance (3), ao, vis, bent vector in world space (3), n;
-  // with history_window, two such groups (the chains) and the frame's own irradiance (3).
-  static constexpr int kChannels = 9;
+  // Per-pixel history channels: irradiance (3, only when the outputs gather light), ao, vis,
+  // bent vector in world space (3), n; with history_window, two such groups (the chains) and,
+  // when gathering, the frame's own irradiance (3). What is not gathered is not carried, so
+  // that ao and bentcone alone reproject 6 channels, not 9.
+  static constexpr int kIrradianceChannels = 3;
+  static constexpr int kOcclusionChannels = 6;
 
  private:
   // `release`: g itself, whose fields are freed after their last use; or null.
@@ -94,7 +97,7 @@ class TemporalChain {
   ViewGBuffer view_;         // the history's view-space G-buffer
   Camera cam_;               // and camera
   int frame_ = 0;            // and frame number
-  std::vector<float> data_;  // kChannels per pixel
+  std::vector<float> data_;  // the history channels per pixel (see above)
   RadianceCache cache_;      // radiance_cache > 0: what the last frames showed
 };
 
