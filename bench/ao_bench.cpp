@@ -12,16 +12,17 @@
 //   Mpixels/s   frame pixels per second
 // Arguments: gather (0: ao and bentcone only, 1: with the irradiance gather), vectorised
 // (1: SIMD march, 0: the scalar reference), steps per side, search_scale (0: auto, the
-// default; 1: every pixel). BM_Frame times the whole single-frame computation instead
-// (default outputs or ao + bentcone), BM_Read the reading of the frame's fields for them
-// (what `hbil run -v` reports as "read"; file MB/s counts the whole file, every channel of
-// which is decompressed).
+// default; 1: every pixel). BM_March times the march alone (the kernel), BM_Frame the whole
+// single-frame computation (default outputs or ao + bentcone), BM_Read the reading of the frame's
+// fields for them (what `hbil run -v` reports as "read"; file MB/s counts the whole file, every
+// channel of which is decompressed).
 #include <benchmark/benchmark.h>
 
 #include <cstdlib>
 #include <filesystem>
 
 #include "hbil/ao_frame.h"
+#include "hbil/interleave.h"
 #include "hbil/reduced.h"
 #include "io/camera_io.h"
 #include "io/exr_frame.h"
@@ -80,6 +81,39 @@ void BM_Search(benchmark::State& state) {
   state.SetLabel(std::to_string(f.g.width) + "x" + std::to_string(f.g.height) + ", search 1 in " +
                  std::to_string(n) + "x" + std::to_string(n));
 }
+
+// The march alone, the kernel: horizon_interleaved on the texels search_frame marches (the
+// reduced view at the default search_scale), without the spatial filter and the upsample
+// around it, which BM_Search includes. The gather's source radiance is a constant (the
+// march's cost does not depend on its values). Counter samples/s as BM_Search's, over the
+// texels marched.
+void BM_March(benchmark::State& state) {
+  const bool gather = state.range(0) != 0;
+  Params p;
+  p.outputs = gather ? std::vector<std::string>{"ao", "bentcone", "irradiance"}
+                     : std::vector<std::string>{"ao", "bentcone"};
+  const Frame& f = frame();
+  const ViewGBuffer v = make_view_gbuffer(f.g, f.cam, p);
+  const int n = effective_search_scale(p, v.width, v.height);
+  const ViewGBuffer lo = n > 1 ? reduce_view(v, n) : ViewGBuffer{};
+  const ViewGBuffer& sv = n > 1 ? lo : v;
+  const HorizonConfig c = make_horizon_config(p, f.cam);
+  const std::vector<Vec3> radiance(sv.pixels(), Vec3{0.5f, 0.5f, 0.5f});
+  for (auto _ : state) {
+    HorizonImage h = horizon_interleaved(sv, c, p.slices, gather ? &radiance : nullptr);
+    benchmark::DoNotOptimize(h.ao.data());
+  }
+  const int per_side = p.steps + (gather ? p.gather_steps : 0);
+  state.counters["samples/s"] = benchmark::Counter(double(sv.pixels()) * p.slices * 2 * per_side,
+                                                   benchmark::Counter::kIsIterationInvariantRate);
+  state.SetLabel(std::to_string(sv.width) + "x" + std::to_string(sv.height) + " texels marched");
+}
+BENCHMARK(BM_March)
+    ->ArgNames({"gather"})
+    ->Args({0})
+    ->Args({1})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 // The whole single-frame computation (compute_ao_frame: view-space G-buffer, search, spatial
 // filter, outputs), what `hbil run -v --set temporal=false` reports as "compute".
