@@ -142,7 +142,7 @@ void MarchBitmaskRow(const SampleView& view, int i0, int j, int count, const flo
           return hn::Mul(sign, FastAcos(d, Clamp(cv, hn::Set(d, -1.f), one)));
         };
         auto ray_at = [&](VF o) {  // f.ray_P + L.dv * (sign * o) * float(view.stride)
-          return Add3(ray_P, Scale(Scale(L.dv, hn::Mul(sign, o)), stride));
+          return RayAt(ray_P, L.dv, hn::Mul(sign, o), stride);
         };
         MF alive = live;  // not yet past the screen edge
         for (int k = 0; k < px.n_steps && !hn::AllFalse(d, alive); ++k) {

@@ -99,6 +99,14 @@ HWY_INLINE VF FacingWeight(DF d, VF n_dot_d3, VF dist) {
   return hn::Mul(hn::Mul(x, x), hn::Sub(hn::Set(d, 3.f), hn::Mul(hn::Set(d, 2.f), x)));
 }
 
+// The ray f.ray_P + L.dv * (sign * o) * stride of march_common.h, with sign_o = sign * o.
+// L.dv.z is 0, so its z term adds a zero to ray_P.z (o and the stride are finite), which
+// is therefore the result to the bit, and is not computed.
+HWY_INLINE V3 RayAt(const V3& ray_P, const V3& dv, VF sign_o, VF stride) {
+  return {hn::Add(ray_P.x, hn::Mul(hn::Mul(dv.x, sign_o), stride)),
+          hn::Add(ray_P.y, hn::Mul(hn::Mul(dv.y, sign_o), stride)), ray_P.z};
+}
+
 // Lanes = texels i0 + base + lane of row j (march::march_setup and pixel_frame); lanes past
 // the run read the run's first texel and, like background texels, are not `valid`.
 struct PixelLanes {
@@ -224,8 +232,7 @@ HWY_INLINE StepLanes TakeStep(DF d, const SampleView& view, int j, int k, VF sx,
   V3 S = Gather3(d, view.position, st.k3);
   st.n_s = Gather3(d, view.normal, st.k3);
   // f.ray_P + L.dv * (sign * o) * float(view.stride)
-  const V3 ray =
-      Add3(px.ray_P, Scale(Scale(L.dv, hn::Mul(sign, st.o)), hn::Set(d, float(view.stride))));
+  const V3 ray = RayAt(px.ray_P, L.dv, hn::Mul(sign, st.o), hn::Set(d, float(view.stride)));
   const VF denom = Dot(ray, st.n_s);
   const MF steep =
       hn::Gt(hn::Mul(denom, denom), hn::Mul(hn::Set(d, march::kGrazing2), Dot(ray, ray)));
