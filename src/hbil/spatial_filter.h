@@ -24,6 +24,15 @@ inline bool same_surface(const Vec3& P, const Vec3& n, const Vec3& Q, const Vec3
   return std::fabs(dot(Q - P, n)) <= tol && dot(m, n) >= 0.8f;
 }
 
-HorizonImage spatial_filter(const ViewGBuffer& g, const HorizonImage& in, float depth_tolerance);
+// `vectorised`: the pixels whose windows lie inside the columns run one per SIMD lane
+// (spatial_filter_simd.cpp; the same results to the bit); false: all by the scalar loop.
+HorizonImage spatial_filter(const ViewGBuffer& g, const HorizonImage& in, float depth_tolerance,
+                            bool vectorised = true);
+
+// spatial_filter_simd.cpp: pixels x0 .. x0 + count − 1 of row y, as many as fill whole SIMD
+// vectors (the number done, from x0), into `out` (a copy of `in`); needs x0 >= 1 and
+// x0 + count + 2 <= g.width.
+int spatial_filter_run(const ViewGBuffer& g, const HorizonImage& in, float depth_tolerance, int y,
+                       int x0, int count, HorizonImage& out);
 
 }  // namespace hbil
