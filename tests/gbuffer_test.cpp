@@ -91,6 +91,88 @@ TEST(ZeroNormals, AreBackgroundForTheSearch) {
 // horizontal runs reach the image's edges), the wall says nothing (every run of it reaches an
 // edge: -1), and the 6 rows of a tilted floor (above a strip at depth 2) are one run however
 // much its depth changes from row to row, up to the largest thickness given (1.5).
+TEST(ViewGBuffer, SimdRowsGiveTheScalarBufferToTheBit) {
+  // The busy scene with a back-face depth, made awkward on purpose: zero, NaN, infinite and
+  // short normals, depths at and past the background, back faces in front of, just behind and
+  // far behind the front, zero and NaN coverage; a width that is no multiple of any vector
+  // length.
+  Camera cam;
+  GBuffer g = test::busy_scene(cam);
+  std::uint32_t state = 99;
+  auto next = [&] { return (state = state * 1664525u + 1013904223u) >> 8; };
+  g.backdepth.resize(g.pixels());
+  g.alpha.assign(g.pixels(), 1.f);
+  for (size_t i = 0; i < g.pixels(); ++i) {
+    const float z = g.depth[i];
+    g.backdepth[i] = z + float(next() % 1000) * 1e-3f - 0.1f;
+    switch (next() % 30) {
+      case 0:
+        g.normal[i] = Vec3{};
+        break;
+      case 1:
+        g.normal[i].y = std::nanf("");
+        break;
+      case 2:
+        g.normal[i].x = HUGE_VALF;
+        break;
+      case 3:
+        g.normal[i] = g.normal[i] * 0.25f;
+        break;
+      case 4:
+        g.depth[i] = 1e10f;
+        break;
+      case 5:
+        g.depth[i] = std::nanf("");
+        break;
+      case 6:
+        g.alpha[i] = 0.f;
+        break;
+      case 7:
+        g.alpha[i] = std::nanf("");
+        break;
+      case 8:
+        g.backdepth[i] = z * 1.001f;
+        break;
+      case 9:
+        g.backdepth[i] = 1e10f;
+        break;
+      default:
+        break;
+    }
+  }
+  for (int w : {g.width, g.width - 3}) {
+    GBuffer c = g;
+    if (w != g.width) {  // the first w columns
+      auto crop = [&](auto& field) {
+        auto out = field;
+        out.clear();
+        for (int y = 0; y < g.height; ++y)
+          for (int x = 0; x < w; ++x) out.push_back(field[size_t(y) * g.width + x]);
+        field = out;
+      };
+      crop(c.depth), crop(c.backdepth), crop(c.normal), crop(c.alpha);
+      c.width = w;
+    }
+    Params p;
+    p.vectorised = false;
+    const ViewGBuffer a = make_view_gbuffer(c, cam, p);
+    p.vectorised = true;
+    const ViewGBuffer b = make_view_gbuffer(c, cam, p);
+    ASSERT_EQ(a.position.size(), b.position.size());
+    ASSERT_EQ(a.thickness.size(), b.thickness.size());
+    EXPECT_EQ(std::memcmp(a.position.data(), b.position.data(), a.position.size() * 12), 0) << w;
+    EXPECT_EQ(std::memcmp(a.normal.data(), b.normal.data(), a.normal.size() * 12), 0) << w;
+    EXPECT_EQ(std::memcmp(a.thickness.data(), b.thickness.data(), a.thickness.size() * 4), 0) << w;
+    // Not vacuous: geometry, background and measured thickness all occur.
+    size_t geometry = 0, thick = 0;
+    for (size_t i = 0; i < a.pixels(); ++i)
+      geometry += !a.is_background(i), thick += a.thickness[i] >= 0.f;
+    EXPECT_GT(geometry, a.pixels() / 2);
+    EXPECT_LT(geometry, a.pixels());
+    EXPECT_GT(thick, geometry / 2);
+  }
+}
+
 TEST(ThicknessExtent, BoundsEachPixelByTheSmallerRunOfItsSurface) {
   constexpr int kW = 64, kH = 32;
   Camera cam;

@@ -114,7 +114,9 @@ ViewGBuffer make_view_gbuffer(const GBuffer& g, const Camera& cam, const Params&
   const bool back = !g.backdepth.empty();
   if (back) v.thickness.assign(g.pixels(), -1.f);
   tbb::parallel_for(0, g.height, [&](int y) {
-    for (int x = 0; x < g.width; ++x) {
+    const int simd =
+        from_depth && p.vectorised ? view_row_from_depth(g, cam, p.background_depth, y, v) : 0;
+    for (int x = simd; x < g.width; ++x) {
       const size_t i = size_t(y) * g.width + x;
       if (!g.alpha.empty() && !(g.alpha[i] > 0.f)) continue;
       const Vec3d n = normalize_or_zero(cam.world_dir_to_view(Vec3d(g.normal[i])));

@@ -83,6 +83,11 @@ struct ViewGBuffer {
 // visible surface is itself a back face, or a single-sided surface), it is −1. Without a
 // back-face layer, with p.thickness_extent and the bitmask method, thickness_from_extent.
 ViewGBuffer make_view_gbuffer(const GBuffer& g, const Camera& cam, const Params& p);
+// gbuffer_simd.cpp: make_view_gbuffer's pixels of row y from a depth pass, from x = 0 in whole
+// SIMD vectors (the number done), into v (sized, its thickness too where g has a back-face
+// depth); with p.vectorised, make_view_gbuffer takes them from it (the same values to the bit).
+int view_row_from_depth(const GBuffer& g, const Camera& cam, double background_depth, int y,
+                        ViewGBuffer& v);
 
 // Without a back-face layer, an object is taken to be as thick as it is wide, up to
 // `at_most` (the constant thickness): each geometry pixel's thickness is the smaller of the

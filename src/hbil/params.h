@@ -26,9 +26,9 @@ struct Params {
   bool interleave = true;      // 4x4 deinterleaved rendering (§3.3); off = every pixel all slices
   bool spatial_filter = true;  // depth-aware 4x4 filter after re-interleaving
   double depth_tolerance = 0.05;  // spatial filter: relative depth difference still averaged
-  bool vectorised = true;         // SIMD march (identical results); false = scalar reference
-  int search_scale = 0;  // the search runs on every n-th pixel of every n-th row (reduced.h);
-                         // 0: auto (effective_search_scale: >= 540 pixels across)
+  bool vectorised = true;  // SIMD march and view G-buffer (identical results); false = scalar
+  int search_scale = 0;    // the search runs on every n-th pixel of every n-th row (reduced.h);
+                           // 0: auto (effective_search_scale: >= 540 pixels across)
 
   // --- Occlusion model and indirect light ---
   std::string method = "bitmask";  // "horizon" (HBIL) or "bitmask" (Therrien et al. 2023)
