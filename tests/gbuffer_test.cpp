@@ -3,6 +3,7 @@
 #include "hbil/gbuffer.h"
 
 #include <gtest/gtest.h>
+#include <hwy/targets.h>
 
 #include <cmath>
 #include <cstring>
@@ -157,12 +158,19 @@ TEST(ViewGBuffer, SimdRowsGiveTheScalarBufferToTheBit) {
     p.vectorised = false;
     const ViewGBuffer a = make_view_gbuffer(c, cam, p);
     p.vectorised = true;
-    const ViewGBuffer b = make_view_gbuffer(c, cam, p);
-    ASSERT_EQ(a.position.size(), b.position.size());
-    ASSERT_EQ(a.thickness.size(), b.thickness.size());
-    EXPECT_EQ(std::memcmp(a.position.data(), b.position.data(), a.position.size() * 12), 0) << w;
-    EXPECT_EQ(std::memcmp(a.normal.data(), b.normal.data(), a.normal.size() * 12), 0) << w;
-    EXPECT_EQ(std::memcmp(a.thickness.data(), b.thickness.data(), a.thickness.size() * 4), 0) << w;
+    // Every instruction set the machine has.
+    for (std::int64_t t : hwy::SupportedAndGeneratedTargets()) {
+      SCOPED_TRACE(hwy::TargetName(t));
+      hwy::SetSupportedTargetsForTest(t);
+      const ViewGBuffer b = make_view_gbuffer(c, cam, p);
+      ASSERT_EQ(a.position.size(), b.position.size());
+      ASSERT_EQ(a.thickness.size(), b.thickness.size());
+      EXPECT_EQ(std::memcmp(a.position.data(), b.position.data(), a.position.size() * 12), 0) << w;
+      EXPECT_EQ(std::memcmp(a.normal.data(), b.normal.data(), a.normal.size() * 12), 0) << w;
+      EXPECT_EQ(std::memcmp(a.thickness.data(), b.thickness.data(), a.thickness.size() * 4), 0)
+          << w;
+    }
+    hwy::SetSupportedTargetsForTest(0);
     // Not vacuous: geometry, background and measured thickness all occur.
     size_t geometry = 0, thick = 0;
     for (size_t i = 0; i < a.pixels(); ++i)

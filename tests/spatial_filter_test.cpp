@@ -1,9 +1,11 @@
 // spatial_filter_test.cpp: the re-interleave filter (spatial_filter.h): on one surface it is
 // the plain mean of the 4x4 window, it never mixes two surfaces, background pixels keep
-// their values, and the SIMD runs give the scalar loop's results to the bit.
+// their values, and the SIMD runs give the scalar loop's results to the bit, with every
+// instruction set the machine has.
 #include "hbil/spatial_filter.h"
 
 #include <gtest/gtest.h>
+#include <hwy/targets.h>
 
 #include <bit>
 #include <cstdint>
@@ -104,8 +106,14 @@ TEST(SpatialFilter, SimdRunsGiveTheScalarResultsToTheBit) {
       }
       if (s.v.pixels() > 20) s.h.vis[20] = std::nanf("");
       const HorizonImage scalar = spatial_filter(s.v, s.h, 0.05f, false);
+      // Every instruction set the machine has.
+      for (std::int64_t t : hwy::SupportedAndGeneratedTargets()) {
+        SCOPED_TRACE(hwy::TargetName(t));
+        hwy::SetSupportedTargetsForTest(t);
+        expect_same_bits(scalar, spatial_filter(s.v, s.h, 0.05f, true));
+      }
+      hwy::SetSupportedTargetsForTest(0);
       const HorizonImage simd = spatial_filter(s.v, s.h, 0.05f, true);
-      expect_same_bits(scalar, simd);
       // Background pixels keep the input's values.
       for (size_t i = 0; i < s.v.pixels(); ++i)
         if (s.v.is_background(i)) EXPECT_EQ(simd.ao[i], s.h.ao[i]);
