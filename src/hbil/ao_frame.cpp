@@ -113,7 +113,7 @@ HorizonImage search_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& 
     }
     HorizonImage h = p.interleave ? horizon_interleaved(sv, c, p.slices, radiance, true, reuse)
                                   : horizon_full(sv, c, p.slices, radiance);
-    if (p.interleave && p.spatial_filter) h = spatial_filter(sv, h, tol);
+    if (p.interleave && p.spatial_filter) h = spatial_filter(sv, h, tol, p.vectorised);
     return f > 1 ? upsample_horizon(v, lo, f, h, tol) : h;
   };
   // Bounce k gathers the outgoing radiance of bounce k − 1 (bounce 0: direct light and
