@@ -123,8 +123,8 @@ AoFrame TemporalChain::run(const GBuffer& g, GBuffer* release, const Camera& cam
   }
 
   // Reprojection of the history into this frame.
-  // With history_window, two chains of kChannels each (window_weight), then the frame's own
-  // irradiance before accumulation, which is what is fed back.
+  // With history_window, two chains of per_chain channels each (window_weight), then the
+  // frame's own irradiance before accumulation, which is what is fed back (when gathering).
   const int window = p_.history_window, chains = window > 0 ? 2 : 1;
   const bool gather = gathers(p_);
   const int ne = gather ? kIrradianceChannels : 0;  // a chain's irradiance channels, first
