@@ -26,7 +26,9 @@ int ViewRowFromDepth(const GBuffer& g, const Camera& cam, double background_dept
   const bool alpha = !g.alpha.empty(), back = !g.backdepth.empty();
   const VD zero = hn::Zero(dd), bg = hn::Set(dd, background_depth);
   const VD cx = hn::Set(dd, cam.cx), fx = hn::Set(dd, cam.fx);
-  const VD vy = hn::Set(dd, double(y) + 0.5), cy = hn::Set(dd, cam.cy), fy = hn::Set(dd, cam.fy);
+  // The row's (v − cy) / fy of cam.unproject(u, v, z), v = y + 0.5: the same for every lane.
+  const VD ry =
+      hn::Div(hn::Sub(hn::Set(dd, double(y) + 0.5), hn::Set(dd, cam.cy)), hn::Set(dd, cam.fy));
   const VD margin = hn::Set(dd, 1.001);
   const VF zero_f = hn::Zero(df), background_f = hn::Set(df, ViewGBuffer::kBackground);
   const VF no_thickness = hn::Set(df, -1.f);
@@ -63,7 +65,7 @@ int ViewRowFromDepth(const GBuffer& g, const Camera& cam, double background_dept
     // cam.unproject(x + 0.5, y + 0.5, z)
     const VD u = hn::Add(hn::Iota(dd, double(x)), hn::Set(dd, 0.5));
     const VD px = hn::Mul(hn::Div(hn::Sub(u, cx), fx), z);
-    const VD py = hn::Mul(hn::Div(hn::Sub(vy, cy), fy), z);
+    const VD py = hn::Mul(ry, z);
     const auto ok_f = to_float_mask(ok);
     hn::StoreInterleaved3(hn::IfThenElseZero(ok_f, hn::DemoteTo(df, px)),
                           hn::IfThenElseZero(ok_f, hn::DemoteTo(df, py)),
