@@ -115,6 +115,26 @@ BENCHMARK(BM_March)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
+// The view-space G-buffer of the frame (make_view_gbuffer, from its depth pass): argument 1
+// the SIMD rows, 0 the scalar loop (`vectorised`); the same buffer to the bit.
+void BM_ViewGBuffer(benchmark::State& state) {
+  Params p;
+  p.vectorised = state.range(0) != 0;
+  const Frame& f = frame();
+  for (auto _ : state) {
+    ViewGBuffer v = make_view_gbuffer(f.g, f.cam, p);
+    benchmark::DoNotOptimize(v.position.data());
+  }
+  state.counters["Mpixels/s"] = benchmark::Counter(double(f.g.pixels()) * 1e-6,
+                                                   benchmark::Counter::kIsIterationInvariantRate);
+}
+BENCHMARK(BM_ViewGBuffer)
+    ->ArgNames({"simd"})
+    ->Args({0})
+    ->Args({1})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
 // The whole single-frame computation (compute_ao_frame: view-space G-buffer, search, spatial
 // filter, outputs), what `hbil run -v --set temporal=false` reports as "compute".
 void BM_Frame(benchmark::State& state) {
