@@ -9,17 +9,21 @@
 #                                               times are read back from the EXR headers)
 #   LADDER="1 2 4 8 16 32 64" RUNS=3 BLENDER=blender   (the defaults)
 #   PRESET=presets/interior.json ...            hbil's preset (default: presets/default.json)
+#   SCENES="hall street" SAMPLES_DIR=/tmp/heldout FRAMES=1-4 ...
+#                                               scenes not committed: SAMPLES_DIR/S/ holds
+#                                               their reference, rendered as the committed
+#                                               ones are (512 spp, seed 1, back faces merged)
 #
-# For every scene S (samples/blender/S.py; committed reference: samples/S/, 512 spp, 8 diffuse
-# bounces, seed 1, frames 1-8):
-#  1. Cycles ladder: frames 1-8 rendered at N spp for every N in LADDER, seed 7, with full GI
+# For every scene S (samples/blender/S.py; reference: SAMPLES_DIR/S/, by default the committed
+# samples/S/, 512 spp, 8 diffuse bounces, seed 1, frames FRAMES, by default 1-8):
+#  1. Cycles ladder: frames FRAMES rendered at N spp for every N in LADDER, seed 7, with full GI
 #     (`--mode main`, the committed settings) and with direct light only (`--bounces 0`).
 #     Time per frame = Cycles' own `cycles.ViewLayer.render_time` from each EXR header (path
 #     tracing only: no scene load, no sync, no EXR write), mean over the frames. Blender writes
 #     it truncated to 10 ms; bench adds 5 ms to each frame's value (unbiased for the mean).
-#  2. hbil bench on the committed frames (default preset, RUNS timed runs, median), with every
+#  2. hbil bench on the reference frames (default preset, RUNS timed runs, median), with every
 #     full-GI rung as a --render: composite PSNR of hbil and of every rung over R, G, B
-#     (non-background pixels of all 8 frames, peak 1) against the committed Combined, and
+#     (non-background pixels of all the frames, peak 1) against the reference's Combined, and
 #     bench's equal-error speedup. A second bench gives the direct-only rungs' times the same
 #     way (their PSNR is not used).
 #  3. Cycles' time at hbil's PSNR, as bench interpolates it: log(time) linear in PSNR between
@@ -27,7 +31,8 @@
 #     equivalent spp and the direct-only time are interpolated at the same point; full minus
 #     direct-only is Cycles' marginal cost of the indirect light there.
 # Output (stdout): machine load at start and end, a summary table per scene, the full ladder.
-# Cost: a few minutes per scene on 2 idle cores (both ladders sum to 2 x 127 spp x 8 frames).
+# Cost: a few minutes per scene on 2 idle cores (both ladders of 1-64 sum to 2 x 127 spp x 8
+# frames).
 # Needs blender 3.4 and python3.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -41,7 +46,10 @@ ladder=${LADDER:-1 2 4 8 16 32 64}
 runs=${RUNS:-3}
 preset=${PRESET:-presets/default.json}
 blender=${BLENDER:-blender}
-frames=1-8
+samples=${SAMPLES_DIR:-samples}
+frames=${FRAMES:-1-8}
+[[ $frames =~ ^([0-9]+)-([0-9]+)$ ]] || { echo "equal_error.sh: FRAMES must be A-B" >&2; exit 2; }
+n_frames=$((10#${BASH_REMATCH[2]} - 10#${BASH_REMATCH[1]} + 1))
 seed=7
 command -v "$blender" > /dev/null || { echo "equal_error.sh: $blender not found" >&2; exit 2; }
 
@@ -72,7 +80,7 @@ rung() {
     touch "$dir/done"
   fi
   nf=$(find "$dir" -name 'frame_*.exr' | wc -l)
-  [ "$nf" = 8 ] || { echo "equal_error.sh: $dir has $nf frames, not 8" >&2; exit 1; }
+  [ "$nf" = "$n_frames" ] || { echo "equal_error.sh: $dir has $nf frames, not $n_frames" >&2; exit 1; }
 }
 
 echo "# Equal-error ladder: Cycles vs hbil"
@@ -82,7 +90,7 @@ echo "- load at start: $(uptime)"
 
 read -r -a rungs <<< "$ladder"
 for s in $scenes; do
-  [ -f "samples/blender/$s.py" ] && [ -f "samples/$s/frame_0001.exr" ] ||
+  [ -f "samples/blender/$s.py" ] && [ -f "$samples/$s/frame_0001.exr" ] ||
     { echo "equal_error.sh: unknown scene $s" >&2; exit 2; }
   mkdir -p "$work/$s"
   full=() direct=()
@@ -92,17 +100,17 @@ for s in $scenes; do
     full+=(--render "$work/$s/full_spp$n/frame_####.exr")
     direct+=(--render "$work/$s/direct_spp$n/frame_####.exr")
   done
-  in="samples/$s/frame_####.exr"
+  in="$samples/$s/frame_####.exr"
   log "$s: hbil bench, $runs runs"
   "$hbil" bench "$in" -o "$work/$s/bench" -q --runs "$runs" --preset "$preset" \
-    --ref "composite=$in:Combined" "${full[@]}" > /dev/null
+    --frames "$frames" --ref "composite=$in:Combined" "${full[@]}" > /dev/null
   "$hbil" bench "$in" -o "$work/$s/bench_direct" -q --preset presets/default.json \
-    --ref "composite=$in:Combined" "${direct[@]}" > /dev/null
+    --frames "$frames" --ref "composite=$in:Combined" "${direct[@]}" > /dev/null
 done
 
-python3 - "$work" $scenes << 'EOF'
+python3 - "$work" "$frames" $scenes << 'EOF'
 import json, math, sys
-work, scenes = sys.argv[1], sys.argv[2:]
+work, frames, scenes = sys.argv[1], sys.argv[2], sys.argv[3:]
 summary, ladders, notes = [], [], []
 for s in scenes:
     j = json.load(open("%s/%s/bench/bench.json" % (work, s)))
@@ -145,15 +153,15 @@ for s in scenes:
         notes.append("%s: the full-GI PSNR is not monotonic in spp" % s)
 
 print("\n## Cycles at hbil's error\n")
-print("PSNR in dB over R, G, B, non-background pixels of frames 1-8, against the committed "
-      "512-spp 8-bounce render (hbil bench); s/frame: hbil's whole run (read + compute + "
-      "write, median of the timed runs), Cycles' render_time (path tracing only).\n")
+print("PSNR in dB over R, G, B, non-background pixels of frames %s, against the "
+      "512-spp 8-bounce reference (hbil bench); s/frame: hbil's whole run (read + compute + "
+      "write, median of the timed runs), Cycles' render_time (path tracing only).\n" % frames)
 print("| scene | hbil PSNR | hbil s/frame | Cycles s/frame at equal PSNR | Cycles / hbil | "
       "equal-PSNR spp | Cycles direct-only s/frame at that spp | Cycles marginal GI s/frame | "
       "marginal GI / hbil |")
 print("|---|---|---|---|---|---|---|---|---|")
 print("\n".join(summary))
-print("\n## Ladder (Cycles, seed 7, frames 1-8)")
+print("\n## Ladder (Cycles, seed 7, frames %s)" % frames)
 print("\n".join(ladders))
 for n in notes:
     print("\nNote: " + n)

@@ -6,6 +6,8 @@
 #   SPP_ROOM_POLES="8 16" SPP_COURTYARD="4 8"   the Cycles rungs around hbil's equal-error
 #       point of the 256x144 ladder (bench/equal_error.sh), the defaults
 #   RUNS=3 BLENDER=blender KEEP=dir
+#   SCENES="hall street" HD_HALL=dir SPP_HALL="16 32" ...   other scenes of samples/blender
+#       (default: room_poles courtyard); HD_<SCENE> and SPP_<SCENE> as above
 #   PRESET=presets/interior.json   hbil's preset (default: none, the built-in defaults)
 #
 # Each dir holds a 1920x1080 sequence of the scene rendered as samples/README.md says
@@ -57,7 +59,7 @@ hbil_run() {  # hbil_run SCENE DIR
     sed -n "s/.* \([0-9.]*\) s per frame.*/$1 hbil: \1 s per frame/p"
 }
 
-for s in room_poles courtyard; do
+for s in ${SCENES:-room_poles courtyard}; do
   var=HD_${s^^}
   dir=${!var:-}
   [ -n "$dir" ] || { echo "- $s: $var not set, skipped"; continue; }
