@@ -9,6 +9,10 @@
 #                                               times are read back from the EXR headers)
 #   LADDER="1 2 4 8 16 32 64" RUNS=3 BLENDER=blender   (the defaults)
 #   PRESET=presets/interior.json ...            hbil's preset (default: presets/default.json)
+#   PANORAMA=1 ...                              hbil with a small panorama of each frame
+#                                               (samples/blender/panorama.py, 128x64, 4 spp;
+#                                               README "A panorama of each frame"), whose
+#                                               Cycles render time counts as hbil's
 #   SCENES="hall street" SAMPLES_DIR=/tmp/heldout FRAMES=1-4 ...
 #                                               scenes not committed: SAMPLES_DIR/S/ holds
 #                                               their reference, rendered as the committed
@@ -83,6 +87,36 @@ rung() {
   [ "$nf" = "$n_frames" ] || { echo "equal_error.sh: $dir has $nf frames, not $n_frames" >&2; exit 1; }
 }
 
+# panorama S: renders S's panoramas (unless reusable) into $work/S/pano and writes their mean
+# Cycles render time per frame (render_time + 5 ms, as bench takes it) to $work/S/pano/seconds.
+panorama() {
+  local s=$1 dir t sum=0 n=0
+  dir="$work/$s/pano"
+  if [ -n "${REUSE:-}" ] && [ -f "$dir/done" ]; then
+    log "$s panorama: reused"
+  else
+    rm -rf "$dir"
+    mkdir -p "$dir"
+    log "$s panorama: rendering"
+    { "$blender" -b --factory-startup --python "samples/blender/$s.py" -- \
+        --save-blend "$dir/scene.blend" --no-render &&
+      "$blender" -b "$dir/scene.blend" --python samples/blender/panorama.py -- --out "$dir" \
+        --frames "$frames"; } > "$dir/blender.log" 2>&1 || { tail -n 20 "$dir/blender.log" >&2; exit 1; }
+    touch "$dir/done"
+  fi
+  for f in "$dir"/pano_*.exr; do
+    t=$(iinfo -v "$f" | sed -n 's/^ *cycles\.ViewLayer\.render_time: *"\(.*\)"/\1/p')
+    [ -n "$t" ] || { echo "equal_error.sh: $f has no render_time" >&2; exit 1; }
+    sum=$(python3 -c 'import sys
+s = 0.0
+for part in sys.argv[1].split(":"): s = 60 * s + float(part)
+print(float(sys.argv[2]) + s + 0.005)' "$t" "$sum")
+    n=$((n + 1))
+  done
+  [ "$n" = "$n_frames" ] || { echo "equal_error.sh: $dir has $n panoramas, not $n_frames" >&2; exit 1; }
+  python3 -c 'import sys; print("%.4f" % (float(sys.argv[1]) / int(sys.argv[2])))' "$sum" "$n" > "$dir/seconds"
+}
+
 echo "# Equal-error ladder: Cycles vs hbil"
 echo
 echo "- date: $(date -u +%Y-%m-%dT%H:%MZ), $(nproc) cores, $("$blender" --version 2> /dev/null | head -n 1), hbil: $hbil, preset $preset"
@@ -101,8 +135,15 @@ for s in $scenes; do
     direct+=(--render "$work/$s/direct_spp$n/frame_####.exr")
   done
   in="$samples/$s/frame_####.exr"
+  pano=()
+  rm -f "$work/$s/bench_panorama"
+  if [ -n "${PANORAMA:-}" ]; then
+    panorama "$s"
+    pano=(--set "panorama=$work/$s/pano/pano_####.exr")
+    cp "$work/$s/pano/seconds" "$work/$s/bench_panorama"
+  fi
   log "$s: hbil bench, $runs runs"
-  "$hbil" bench "$in" -o "$work/$s/bench" -q --runs "$runs" --preset "$preset" \
+  "$hbil" bench "$in" -o "$work/$s/bench" -q --runs "$runs" --preset "$preset" "${pano[@]}" \
     --frames "$frames" --ref "composite=$in:Combined" "${full[@]}" > /dev/null
   "$hbil" bench "$in" -o "$work/$s/bench_direct" -q --preset presets/default.json \
     --frames "$frames" --ref "composite=$in:Combined" "${direct[@]}" > /dev/null
@@ -116,7 +157,13 @@ for s in scenes:
     j = json.load(open("%s/%s/bench/bench.json" % (work, s)))
     jd = json.load(open("%s/%s/bench_direct/bench.json" % (work, s)))
     c = j["configurations"][0]
-    p, t_h = c["layers"]["composite"]["psnr"], c["seconds_per_frame"]
+    p, t_run = c["layers"]["composite"]["psnr"], c["seconds_per_frame"]
+    # With PANORAMA, the panoramas' render time per frame is part of hbil's cost.
+    try:
+        t_pano = float(open("%s/%s/bench_panorama" % (work, s)).read())
+    except OSError:
+        t_pano = 0.0
+    t_h = t_run + t_pano
     full = {r["samples"]: r for r in j["renders"]}
     direct = {r["samples"]: r for r in jd["renders"]}
     spps = sorted(full)
@@ -136,12 +183,15 @@ for s in scenes:
         spp, t_d = r["samples"], direct[r["samples"]]["seconds_per_frame"]
         how = "beyond the ladder: bound at %d spp" % r["samples"]
     bound = c.get("equal_error_speedup_bound", "")
-    sp = c["equal_error_speedup"]
-    t_c = sp * t_h
+    t_c = c["equal_error_speedup"] * t_run  # bench's speedup is against hbil's run alone
+    sp = t_c / t_h
     summary.append("| %s | %.2f | %.3f | %s%.3f | %s%.1f | %.1f (%s) | %.3f | %.3f | %.2f |" % (
         s, p, t_h, bound, t_c, bound, sp, spp, how, t_d, t_c - t_d, (t_c - t_d) / t_h))
     ladders.append("\n### %s\n\nhbil: %.3f s/frame (runs: %s), composite PSNR %.2f dB; %s\n" % (
         s, t_h, ", ".join("%.3f" % t for t in c["runs"]), p, j["machine"]))
+    if t_pano > 0:
+        ladders.append("(hbil's %.3f s/frame: its run, %.3f, plus the panorama's Cycles render "
+                       "time, %.4f)\n" % (t_h, t_run, t_pano))
     ladders.append("| spp | PSNR full GI | s/frame full GI | s/frame direct-only |")
     ladders.append("|---|---|---|---|")
     for n in spps:
