@@ -8,6 +8,10 @@
 #   RUNS=3 BLENDER=blender KEEP=dir
 #   SCENES="hall street" HD_HALL=dir SPP_HALL="16 32" ...   other scenes of samples/blender
 #       (default: room_poles courtyard); HD_<SCENE> and SPP_<SCENE> as above
+#   PANO_STREET=dir ...   hbil runs with the panoramas in dir (pano_####.exr, one per frame of
+#       HD_<SCENE>, as samples/blender/panorama.py renders them; bench/equal_error.sh
+#       PANORAMA=1 KEEP=k leaves them in k/<scene>/pano) and their mean Cycles render time is
+#       printed, to be counted as hbil's
 #   PRESET=presets/interior.json   hbil's preset (default: none, the built-in defaults)
 #
 # Each dir holds a 1920x1080 sequence of the scene rendered as samples/README.md says
@@ -53,10 +57,11 @@ render() {  # render SCENE KIND SPP
   t=$(iinfo -v "$dir/frame_0001.exr" | sed -n 's/^ *cycles\.ViewLayer\.render_time: *"\(.*\)"/\1/p')
   echo "$s cycles $kind $n spp: $(seconds "$t") s"
 }
+pano=()
 hbil_run() {  # hbil_run SCENE DIR
   rm -rf "$work/out"
-  "$hbil" run "$2/frame_####.exr" -o "$work/out/frame_####.exr" --no-display "${preset[@]}" 2>&1 |
-    sed -n "s/.* \([0-9.]*\) s per frame.*/$1 hbil: \1 s per frame/p"
+  "$hbil" run "$2/frame_####.exr" -o "$work/out/frame_####.exr" --no-display "${preset[@]}" \
+    "${pano[@]}" 2>&1 | sed -n "s/.* \([0-9.]*\) s per frame.*/$1 hbil: \1 s per frame/p"
 }
 
 for s in ${SCENES:-room_poles courtyard}; do
@@ -69,6 +74,17 @@ for s in ${SCENES:-room_poles courtyard}; do
   read -r -a rungs <<< "${!spp_var:-$default_spp}"
   jobs=()
   for n in "${rungs[@]}"; do jobs+=("main $n" "direct $n"); done
+  pano=()
+  pano_var=PANO_${s^^}
+  if [ -n "${!pano_var:-}" ]; then
+    pano=(--set "panorama=${!pano_var}/pano_####.exr")
+    for f in "${!pano_var}"/pano_*.exr; do
+      t=$(iinfo -v "$f" | sed -n 's/^ *cycles\.ViewLayer\.render_time: *"\(.*\)"/\1/p')
+      seconds "${t:?$f has no render_time}"
+    done | python3 -c 'import sys
+t = [float(x) for x in sys.stdin]
+print("'"$s"' panorama: %.4f s per frame (Cycles, mean of %d)" % (sum(t) / len(t), len(t)))'
+  fi
   {
     hbil_run "$s" "$dir"
     for ((k = 0; k < ${#jobs[@]}; ++k)); do
