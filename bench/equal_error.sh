@@ -67,17 +67,24 @@ fi
 
 log() { echo "[$(date +%T)] $*" >&2; }
 
+# fresh DIR LABEL: succeeds, with DIR emptied, when DIR is to be rendered; fails when REUSE
+# finds it complete (its "done" marker).
+fresh() {
+  if [ -n "${REUSE:-}" ] && [ -f "$1/done" ]; then
+    log "$2: reused"
+    return 1
+  fi
+  rm -rf "$1"
+  mkdir -p "$1"
+  log "$2: rendering"
+}
+
 # rung S KIND N: renders one rung (unless reusable) into $work/S/KIND_sppN.
 rung() {
   local s=$1 kind=$2 n=$3 dir extra=() nf
   dir="$work/$s/${kind}_spp$n"
   [ "$kind" = direct ] && extra=(--bounces 0)
-  if [ -n "${REUSE:-}" ] && [ -f "$dir/done" ]; then
-    log "$s $kind $n spp: reused"
-  else
-    rm -rf "$dir"
-    mkdir -p "$dir"
-    log "$s $kind $n spp: rendering"
+  if fresh "$dir" "$s $kind $n spp"; then
     "$blender" -b --factory-startup --python "samples/blender/$s.py" -- --out "$dir" \
       --mode main --samples "$n" --seed "$seed" --frames "$frames" "${extra[@]}" \
       > "$dir/blender.log" 2>&1 || { tail -n 20 "$dir/blender.log" >&2; exit 1; }
@@ -90,14 +97,9 @@ rung() {
 # panorama S: renders S's panoramas (unless reusable) into $work/S/pano and writes their mean
 # Cycles render time per frame (render_time + 5 ms, as bench takes it) to $work/S/pano/seconds.
 panorama() {
-  local s=$1 dir t sum=0 n=0
+  local s=$1 dir f t
   dir="$work/$s/pano"
-  if [ -n "${REUSE:-}" ] && [ -f "$dir/done" ]; then
-    log "$s panorama: reused"
-  else
-    rm -rf "$dir"
-    mkdir -p "$dir"
-    log "$s panorama: rendering"
+  if fresh "$dir" "$s panorama"; then
     { "$blender" -b --factory-startup --python "samples/blender/$s.py" -- \
         --save-blend "$dir/scene.blend" --no-render &&
       "$blender" -b "$dir/scene.blend" --python samples/blender/panorama.py -- --out "$dir" \
@@ -107,14 +109,13 @@ panorama() {
   for f in "$dir"/pano_*.exr; do
     t=$(iinfo -v "$f" | sed -n 's/^ *cycles\.ViewLayer\.render_time: *"\(.*\)"/\1/p')
     [ -n "$t" ] || { echo "equal_error.sh: $f has no render_time" >&2; exit 1; }
-    sum=$(python3 -c 'import sys
-s = 0.0
-for part in sys.argv[1].split(":"): s = 60 * s + float(part)
-print(float(sys.argv[2]) + s + 0.005)' "$t" "$sum")
-    n=$((n + 1))
-  done
-  [ "$n" = "$n_frames" ] || { echo "equal_error.sh: $dir has $n panoramas, not $n_frames" >&2; exit 1; }
-  python3 -c 'import sys; print("%.4f" % (float(sys.argv[1]) / int(sys.argv[2])))' "$sum" "$n" > "$dir/seconds"
+    echo "$t"
+  done | python3 -c 'import sys
+t = [sum(float(p) * 60 ** k for k, p in enumerate(reversed(l.split(":")))) + 0.005
+     for l in sys.stdin.read().split()]
+if len(t) != int(sys.argv[1]):
+    sys.exit("equal_error.sh: %d panoramas, not %s" % (len(t), sys.argv[1]))
+print("%.4f" % (sum(t) / len(t)))' "$n_frames" > "$dir/seconds"
 }
 
 echo "# Equal-error ladder: Cycles vs hbil"
