@@ -95,6 +95,37 @@ TEST(Unseen, WithoutCarryTheBandsBeyondTheFrameEscape) {
   for (float o : escape_profile(none.v, none.cam, false).open) EXPECT_EQ(o, 1.f);
 }
 
+// With carry, the frame's edges say what is beyond them. A frame of floor seen from above
+// (every normal facing up) leaves the space above it open and closes the space below; a
+// frame of ceiling the reverse; a frame of wall closes both (AFrameOfGeometryEscapesNowhere).
+// A surface at 45 degrees, halfway along the ramp from 0.3 to 0.7 of its up component
+// (sin 45° = 0.707 is just past it), opens its side fully; one tilted 30 degrees (up 0.5)
+// half.
+TEST(Unseen, WithCarryTheFramesEdgesSayWhatIsBeyondThem) {
+  const Vec3 up{0, -1, 0}, down{0, 1, 0};
+  for (const auto& [n, above, below] : {std::tuple{up, 1.f, 0.f},
+                                        {down, 0.f, 1.f},
+                                        {at_elevation(std::numbers::pi / 6), 0.5f, 0.f}}) {
+    const Frame f = frame(64, 36, 0, n);
+    const EscapeProfile p = escape_profile(f.v, f.cam, true);
+    ASSERT_EQ(p.lowest_seen, 5);
+    ASSERT_EQ(p.highest_seen, 10);
+    for (int b = 0; b < kBands; ++b) {
+      const float want = b > 10 ? above : b < 5 ? below : 0.f;
+      EXPECT_NEAR(p.open[size_t(b)], want, 1e-5) << b << " up " << -n.y;
+    }
+    // Without carry the same frame escapes beyond its bands whatever it shows.
+    const EscapeProfile q = escape_profile(f.v, f.cam, false);
+    for (int b = 0; b < kBands; ++b) EXPECT_EQ(q.open[size_t(b)], b >= 5 && b <= 10 ? 0.f : 1.f);
+  }
+  // Sky over the top third of the rows: the top edge (2 of 36 rows) is all background, so
+  // above the frame is open; the bottom edge is wall, so below it is closed.
+  const Frame sky = frame(64, 36, 12);
+  const EscapeProfile p = escape_profile(sky.v, sky.cam, true);
+  EXPECT_EQ(p.open[size_t(kBands - 1)], 1.f);
+  EXPECT_EQ(p.open[0], 0.f);
+}
+
 // Under an open upper half-space, the cosine-weighted fraction of a hemisphere above the
 // horizontal is the sky view factor of a plane tilted from the zenith: (1 + sin e) / 2 for
 // a normal at elevation e.
@@ -127,14 +158,20 @@ TEST(Unseen, TheFillMapDimsTheFillByTheEscape) {
   const std::vector<Vec3> mw =
       unseen_fill_map(wall.v, escape_profile(wall.v, wall.cam, true), fill);
   EXPECT_NEAR(mw[ground].z, 0.5f * fill.z, 2e-3);  // a wall: half its hemisphere is sky
-  const Frame room = frame(64, 36, 0, up);
+  const Frame room = frame(64, 36, 0);
   const std::vector<Vec3> mr =
       unseen_fill_map(room.v, escape_profile(room.v, room.cam, true), fill);
-  EXPECT_EQ(mr[ground].y, fill.y);  // enclosed: the whole fill
+  EXPECT_EQ(mr[ground].y, fill.y);  // walls to the frame's edges, enclosed: the whole fill
+  // A frame of floor alone says nothing of what is above it: facing up, the bands above the
+  // frame (sin(elevation) > 0.375) escape, 1 − 0.375² of the hemisphere's cosine weight.
+  const Frame floor = frame(64, 36, 0, up);
+  const std::vector<Vec3> mf =
+      unseen_fill_map(floor.v, escape_profile(floor.v, floor.cam, true), fill);
+  EXPECT_NEAR(mf[ground].y, 0.375f * 0.375f * fill.y, 2e-3);
 }
 
-// Nothing the model is given ends outside its tables: a NaN normal reads as facing down, a
-// camera with no focal length counts nothing.
+// Nothing the model is given ends outside its tables: a NaN normal reads as facing down in
+// the table and as a wall at the frame's edges, a camera with no focal length counts nothing.
 TEST(Unseen, NonFiniteInputsStayInTheTables) {
   EscapeProfile p;
   p.open[0] = 0.25f;  // straight down
@@ -146,6 +183,9 @@ TEST(Unseen, NonFiniteInputsStayInTheTables) {
   f.cam.fx = f.cam.fy = 0;
   const EscapeProfile none = escape_profile(f.v, f.cam, true);
   for (int b = 0; b < kBands; ++b) EXPECT_EQ(none.open[size_t(b)], 0.f) << b;
+  // A frame of NaN normals with carry: walls at both edges, closed beyond them.
+  const Frame bad = frame(64, 36, 0, Vec3{nan, nan, nan});
+  for (float o : escape_profile(bad.v, bad.cam, true).open) EXPECT_EQ(o, 0.f);
 }
 
 }  // namespace

@@ -122,8 +122,8 @@ void info(const std::string& path, const ParamOptions& po) {
       // facing up, the camera (level) and down.
       const EscapeTable escape(escape_profile(v, c, p.unseen_carry));
       std::cout << "  escape over a normal's hemisphere (each pixel's fill: auto x (1 - it); the "
-                << (p.unseen_carry ? "elevations the frame does not show as open as its top and "
-                                     "bottom"
+                << (p.unseen_carry ? "elevations the frame does not show as open as its top "
+                                     "and bottom edges say"
                                    : "elevations the frame does not show escape")
                 << "): up " << escape.at(Vec3{0, -1, 0}) << ", level " << escape.at(Vec3{0, 0, -1})
                 << ", down " << escape.at(Vec3{0, 1, 0}) << "\n";

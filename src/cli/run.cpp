@@ -92,8 +92,9 @@ void run_frames(const RunOptions& o, io::RunLog& log, int& written) {
       std::cerr << "hbil: unseen_radiance auto: per frame, " << kAutoUnseen
                 << " x the mean DiffCol x DiffDir + Emit of its geometry, times 1 - what its"
                    " background says escapes over each pixel's hemisphere, "
-                << (p.unseen_carry ? "the elevations it does not show as open as its top and bottom"
-                                   : "the elevations it does not show escaping")
+                << (p.unseen_carry
+                        ? "the elevations it does not show as open as its top and bottom edges say"
+                        : "the elevations it does not show escaping")
                 << " (hbil info FRAME prints both)\n";
     if (p.method == "bitmask") {
       std::ostringstream s;

@@ -93,9 +93,10 @@ const std::vector<ParamInfo>& params_table() {
        "the frame's background does not show escaping; 0: none"},
       {"unseen_carry", &Params::unseen_carry, 0, 1, "bool",
        "unseen_radiance \"auto\": the elevations above and below what the frame shows are "
-       "taken to be as open as the frame's top and bottom (true: for enclosed shots, "
-       "presets/interior.json); false (default): they escape, so that a frame says nothing of "
-       "what it does not reach"},
+       "taken to be as open as the frame's top and bottom edges say: background, and a floor "
+       "at the top edge or a ceiling at the bottom, leave them open, walls close them (true: "
+       "for enclosed shots, presets/interior.json); false (default): they escape, so that a "
+       "frame says nothing of what it does not reach"},
       {"bounces", &Params::bounces, 1, 16, "count",
        "in-frame bounces of indirect light: bounce k gathers the outgoing radiance of bounce k-1"},
       {"ao_multibounce", &Params::ao_multibounce, 0, 1, "bool",

@@ -18,16 +18,30 @@ int band_of(double sin_elevation) {
   return u >= 0 ? std::min(int(std::min(u, double(kBands))), kBands - 1) : 0;
 }
 
+// With carry, how far a surface at the frame's top edge leaves the space above the frame
+// open, from the up component of its normal: a wall (up 0) or a ceiling (up < 0) continues
+// above the frame and closes it, a floor (up > 0.7) says nothing of what is above it. The
+// same, mirrored, for the bottom edge and the space below. A ramp in between; a NaN normal
+// counts as a wall.
+double facing(double up) {
+  const double t = (up - 0.3) / 0.4;
+  return t > 0 ? (t < 1 ? t : 1) : 0;
+}
+
 }  // namespace
 
 EscapeProfile escape_profile(const ViewGBuffer& v, const Camera& cam, bool carry) {
   struct Sums {
     std::array<double, kBands> all{}, open{};
+    // The frame's top and bottom edge rows: all, and open above (top) or below (bottom).
+    double top_all = 0, top_open = 0, bottom_all = 0, bottom_open = 0;
   };
+  // The edge rows: the top and bottom 1/16 of the frame (at least one sampled row each).
   // In rows, then row sums in order: the same for any thread count.
   // Every step-th pixel of every step-th row, at most about 256 across: a statistic.
   const int step = std::max(1, std::max(v.width, v.height) / 256);
   const int n_rows = v.height > 0 ? (v.height + step - 1) / step : 0;
+  const int edge = std::max(step, v.height / 16);
   std::vector<Sums> rows(static_cast<size_t>(n_rows));
   tbb::parallel_for(0, n_rows, [&](int row) {
     Sums& s = rows[size_t(row)];
@@ -40,7 +54,18 @@ EscapeProfile escape_profile(const ViewGBuffer& v, const Camera& cam, bool carry
       if (!(w > 0 && w < HUGE_VAL)) continue;
       const int b = band_of(-r.y / len);
       s.all[size_t(b)] += w;
-      if (v.is_background(size_t(y) * v.width + x)) s.open[size_t(b)] += w;
+      const size_t i = size_t(y) * v.width + x;
+      const bool background = v.is_background(i);
+      if (background) s.open[size_t(b)] += w;
+      if (!carry) continue;
+      if (y < edge) {
+        s.top_all += w;
+        s.top_open += background ? w : w * facing(-v.normal[i].y);
+      }
+      if (y >= v.height - edge) {
+        s.bottom_all += w;
+        s.bottom_open += background ? w : w * facing(v.normal[i].y);
+      }
     }
   });
   Sums sum;
@@ -51,6 +76,10 @@ EscapeProfile escape_profile(const ViewGBuffer& v, const Camera& cam, bool carry
       sum.open[size_t(b)] += s.open[size_t(b)];
       total += s.all[size_t(b)];
     }
+  for (const Sums& s : rows) {
+    sum.top_all += s.top_all, sum.top_open += s.top_open;
+    sum.bottom_all += s.bottom_all, sum.bottom_open += s.bottom_open;
+  }
   EscapeProfile p;
   // A band counts as seen with at least 1/1000 of the frame's solid angle (a sliver at the
   // frame's corner says little about its band).
@@ -69,19 +98,20 @@ EscapeProfile escape_profile(const ViewGBuffer& v, const Camera& cam, bool carry
   }
   p.lowest_seen = lo;
   p.highest_seen = hi;
+  // With carry, what the frame's top edge says of the elevations above it, and its bottom
+  // edge of those below.
+  const float above = sum.top_all > 0 ? float(sum.top_open / sum.top_all) : 1.f;
+  const float below = sum.bottom_all > 0 ? float(sum.bottom_open / sum.bottom_all) : 1.f;
   for (int b = 0; b < kBands; ++b) {
     if (seen[size_t(b)]) continue;
-    // Beyond the frame: open, or with carry the top band's fraction above it and the bottom
-    // band's below it. A band inside the frame's range with too little of it takes the
-    // nearest seen band below.
-    if (!carry && (b > hi || b < lo)) {
-      p.open[size_t(b)] = 1.f;
+    // Beyond the frame: open, or with carry as open as the frame's edge on that side. A band
+    // inside the frame's range with too little of it takes the nearest seen band below.
+    if (b > hi || b < lo) {
+      p.open[size_t(b)] = !carry ? 1.f : b > hi ? above : below;
       continue;
     }
-    int from = b > hi ? hi : lo;
-    if (b > lo && b < hi)
-      for (from = b - 1; !seen[size_t(from)]; --from) {
-      }
+    int from = b - 1;
+    while (!seen[size_t(from)]) --from;
     p.open[size_t(b)] = p.open[size_t(from)];
   }
   return p;

@@ -6,10 +6,11 @@
 // directions the camera sees: its background pixels are lines of sight that escape. "auto"
 // takes the frame's escape fraction per band of elevation (the angle above the image's
 // horizontal, in view space). The bands the frame does not reach say nothing, so they
-// escape; or, for enclosed shots (unseen_carry), the top band's fraction is carried up to
-// the zenith and the bottom band's down to the nadir: an open sky at the top of the frame
-// stays open above it, a ceiling stays closed. A pixel with normal n then sees, in its
-// empty directions,
+// escape; or, for enclosed shots (unseen_carry), the frame's top edge says how open the
+// space above it is, and its bottom edge the space below: the share of the edge rows that
+// is background or a surface facing that way (an open sky at the top of the frame stays
+// open above it, a wall or a ceiling closes it, a floor seen from above leaves it open). A
+// pixel with normal n then sees, in its empty directions,
 //
 //   fill(n) = kAutoUnseen x (mean direct outgoing radiance of the frame's geometry)
 //             x (1 − the cosine-weighted escape fraction over n's hemisphere),
@@ -29,8 +30,11 @@ namespace hbil {
 
 // The fraction of lines of sight that escape (background pixels), per band of
 // sin(elevation) over [-1, 1] (band 0 looks straight down, kBands - 1 straight up). The
-// bands the frame does not reach escape (1), or with `carry` take its top and bottom bands'
-// fractions. Each pixel counts with its solid angle. A frame without pixels reaches no band.
+// bands the frame does not reach escape (1), or with `carry` take what its top edge rows
+// (the top 1/16) say of the space above them and its bottom edge rows of the space below:
+// background, and surfaces facing up at the top or down at the bottom, are open (a ramp
+// over the normal's up component from 0.3 to 0.7). Each pixel counts with its solid angle.
+// A frame without pixels reaches no band.
 struct EscapeProfile {
   static constexpr int kBands = 16;
   std::array<float, kBands> open{};
