@@ -18,22 +18,15 @@ is enclosed, whatever its frame shows of the sky.
 
 Needs the python3 OpenImageIO bindings (Debian: python3-openimageio) and numpy.
 """
+import os
 import sys
 
-import numpy as np
-import OpenImageIO as oiio
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from edge_band import plane, read  # noqa: E402
 
 
-def plane(spec, px, name, comps="RGB"):
-    names = list(spec.channelnames)
-    idx = []
-    for c in comps:
-        hits = [i for i, n in enumerate(names) if n.endswith("." + name + "." + c)
-                or n == name + "." + c]
-        if not hits:
-            return None
-        idx.append(hits[0])
-    return px[..., idx]
+def rgb(spec, px, name):
+    return plane(spec, px, *(name + "." + c for c in "RGB"))
 
 
 def main():
@@ -42,22 +35,14 @@ def main():
     print("| frame | geometry | Ld | Li | total | rho | Ein | Ein/L |")
     print("|---|---|---|---|---|---|---|---|")
     for path in sys.argv[1:]:
-        inp = oiio.ImageInput.open(path)
-        if inp is None:
-            raise SystemExit("cannot open %s: %s" % (path, oiio.geterror()))
-        spec = inp.spec()
-        px = inp.read_image(0, 0, 0, spec.nchannels, oiio.FLOAT)
-        inp.close()
-        depth = plane(spec, px, "Depth", "Z")
-        col, ddir, dind = (plane(spec, px, n) for n in ("DiffCol", "DiffDir", "DiffInd"))
-        if depth is None or col is None or ddir is None or dind is None:
-            raise SystemExit("%s: needs Depth, DiffCol, DiffDir and DiffInd" % path)
-        geo = depth[..., 0] < 1e9
+        spec, px = read(path)
+        geo = plane(spec, px, "Depth.Z")[..., 0] < 1e9
         if not geo.any():
             print("| %s | 0 | | | | | | |" % path)
             continue
-        emit = plane(spec, px, "Emit")
-        ld = col * ddir + (emit if emit is not None else 0.0)
+        col, ddir, dind = (rgb(spec, px, n) for n in ("DiffCol", "DiffDir", "DiffInd"))
+        has_emit = any(c.endswith("Emit.R") for c in spec.channelnames)
+        ld = col * ddir + (rgb(spec, px, "Emit") if has_emit else 0.0)
         li = col * dind
         Ld, Li, rho, Ein = (float(a[geo].mean()) for a in (ld, li, col, dind))
         e = Ein / (Ld + Li) if Ld + Li > 0 else float("nan")

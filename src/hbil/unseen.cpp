@@ -70,13 +70,12 @@ EscapeProfile escape_profile(const ViewGBuffer& v, const Camera& cam, bool carry
   });
   Sums sum;
   double total = 0;
-  for (const Sums& s : rows)
+  for (const Sums& s : rows) {
     for (int b = 0; b < kBands; ++b) {
       sum.all[size_t(b)] += s.all[size_t(b)];
       sum.open[size_t(b)] += s.open[size_t(b)];
       total += s.all[size_t(b)];
     }
-  for (const Sums& s : rows) {
     sum.top_all += s.top_all, sum.top_open += s.top_open;
     sum.bottom_all += s.bottom_all, sum.bottom_open += s.bottom_open;
   }
