@@ -13,6 +13,10 @@
 #                                               (samples/blender/panorama.py, 128x64, 4 spp;
 #                                               README "A panorama of each frame"), whose
 #                                               Cycles render time counts as hbil's
+#   CALIBRATE=1 ...                             hbil calibrated (`calibration`) on the
+#                                               ladder's 1-spp full-GI render of the first
+#                                               frame, whose Cycles render time, spread over
+#                                               the frames, counts as hbil's
 #   SCENES="hall street" SAMPLES_DIR=/tmp/heldout FRAMES=1-4 ...
 #                                               scenes not committed: SAMPLES_DIR/S/ holds
 #                                               their reference, rendered as the committed
@@ -54,6 +58,7 @@ samples=${SAMPLES_DIR:-samples}
 frames=${FRAMES:-1-8}
 [[ $frames =~ ^([0-9]+)-([0-9]+)$ ]] || { echo "equal_error.sh: FRAMES must be A-B" >&2; exit 2; }
 n_frames=$((10#${BASH_REMATCH[2]} - 10#${BASH_REMATCH[1]} + 1))
+first_frame=$((10#${BASH_REMATCH[1]}))
 seed=7
 command -v "$blender" > /dev/null || { echo "equal_error.sh: $blender not found" >&2; exit 2; }
 
@@ -143,8 +148,20 @@ for s in $scenes; do
     pano=(--set "panorama=$work/$s/pano/pano_####.exr")
     cp "$work/$s/pano/seconds" "$work/$s/bench_panorama"
   fi
+  cal=()
+  rm -f "$work/$s/bench_calibration"
+  if [ -n "${CALIBRATE:-}" ]; then
+    [[ " $ladder " == *" 1 "* ]] || { echo "equal_error.sh: CALIBRATE needs 1 in LADDER" >&2; exit 2; }
+    c=$(printf '%s/%s/full_spp1/frame_%04d.exr' "$work" "$s" "$first_frame")
+    cal=(--set "calibration=$c")
+    t=$(iinfo -v "$c" | sed -n 's/^ *cycles\.ViewLayer\.render_time: *"\(.*\)"/\1/p')
+    [ -n "$t" ] || { echo "equal_error.sh: $c has no render_time" >&2; exit 1; }
+    python3 -c 'import sys
+t = sum(float(p) * 60 ** k for k, p in enumerate(reversed(sys.argv[1].split(":")))) + 0.005
+print("%.4f" % (t / int(sys.argv[2])))' "$t" "$n_frames" > "$work/$s/bench_calibration"
+  fi
   log "$s: hbil bench, $runs runs"
-  "$hbil" bench "$in" -o "$work/$s/bench" -q --runs "$runs" --preset "$preset" "${pano[@]}" \
+  "$hbil" bench "$in" -o "$work/$s/bench" -q --runs "$runs" --preset "$preset" "${pano[@]}" "${cal[@]}" \
     --frames "$frames" --ref "composite=$in:Combined" "${full[@]}" > /dev/null
   "$hbil" bench "$in" -o "$work/$s/bench_direct" -q --preset presets/default.json \
     --frames "$frames" --ref "composite=$in:Combined" "${direct[@]}" > /dev/null
@@ -159,12 +176,15 @@ for s in scenes:
     jd = json.load(open("%s/%s/bench_direct/bench.json" % (work, s)))
     c = j["configurations"][0]
     p, t_run = c["layers"]["composite"]["psnr"], c["seconds_per_frame"]
-    # With PANORAMA, the panoramas' render time per frame is part of hbil's cost.
-    try:
-        t_pano = float(open("%s/%s/bench_panorama" % (work, s)).read())
-    except OSError:
-        t_pano = 0.0
-    t_h = t_run + t_pano
+    # With PANORAMA, the panoramas' render time per frame is part of hbil's cost; with
+    # CALIBRATE, the calibration render's, spread over the frames.
+    def extra(name):
+        try:
+            return float(open("%s/%s/bench_%s" % (work, s, name)).read())
+        except OSError:
+            return 0.0
+    t_pano, t_cal = extra("panorama"), extra("calibration")
+    t_h = t_run + t_pano + t_cal
     full = {r["samples"]: r for r in j["renders"]}
     direct = {r["samples"]: r for r in jd["renders"]}
     spps = sorted(full)
@@ -193,6 +213,9 @@ for s in scenes:
     if t_pano > 0:
         ladders.append("(hbil's %.3f s/frame: its run, %.3f, plus the panorama's Cycles render "
                        "time, %.4f)\n" % (t_h, t_run, t_pano))
+    if t_cal > 0:
+        ladders.append("(hbil's %.3f s/frame: its run, %.3f, plus the calibration render's "
+                       "Cycles time over the frames, %.4f)\n" % (t_h, t_run, t_cal))
     ladders.append("| spp | PSNR full GI | s/frame full GI | s/frame direct-only |")
     ladders.append("|---|---|---|---|")
     for n in spps:

@@ -251,6 +251,28 @@ void run_frames(const RunOptions& o, io::RunLog& log, int& written) {
                   seconds);
     std::cerr << clear << line << (tty ? "" : "\n") << std::flush;
   };
+  hooks.calibrated = [&](const pipeline::CalibrationPoint& c) {
+    log.write("calibration", {{"frame", c.frame},
+                              {"file", c.path},
+                              {"reference_mean", c.reference},
+                              {"mean_without_fill", c.without},
+                              {"mean_with_fill", c.with},
+                              {"unseen_scale", c.scale},
+                              {"seconds", c.seconds}});
+    if (o.quiet) return;
+    char line[512];
+    if (c.reaches)
+      std::snprintf(line, sizeof line,
+                    "hbil: calibration, frame %d: unseen_scale %.3f (mean DiffCol x DiffInd "
+                    "%.5f; hbil's indirect %.5f without the fill, %.5f with it), %.3f s\n",
+                    c.frame, c.scale, c.reference, c.without, c.with, c.seconds);
+    else
+      std::snprintf(line, sizeof line,
+                    "hbil: calibration, frame %d: the fill reaches no pixel, unseen_scale 1 "
+                    "(mean DiffCol x DiffInd %.5f; hbil's indirect %.5f), %.3f s\n",
+                    c.frame, c.reference, c.without, c.seconds);
+    std::cerr << clear << line;
+  };
   hooks.history_only = [&](int frame, double seconds) {
     log.write("history", {{"frame", frame}, {"seconds", seconds}});
     if (o.quiet) return;

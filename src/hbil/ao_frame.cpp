@@ -127,12 +127,13 @@ HorizonImage search_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& 
   // With the radiance cache, its fill per searched pixel, with unseen_radiance (one
   // radiance: for "auto", the fill of a level normal) where it knows nothing.
   const bool cached = gather && in.cache && !in.cache->empty();
-  const float u = float(p.unseen_radiance);
+  // unseen_scale multiplies either (the fill's level; calibration solves it per shot).
+  const float u = float(p.unseen_radiance * p.unseen_scale);
   std::vector<Vec3> fill_map;
   if (gather) c.fill = Vec3{u, u, u};
   if (gather && p.unseen_radiance_auto) {
     const EscapeProfile escape = escape_profile(v, cam, p.unseen_carry);
-    c.fill = mean_direct_radiance(v, g) * kAutoUnseen;
+    c.fill = mean_direct_radiance(v, g) * (kAutoUnseen * float(p.unseen_scale));
     if (cached) {
       c.fill = c.fill * (1.f - EscapeTable(escape).at(Vec3{0, 0, -1}));
     } else {

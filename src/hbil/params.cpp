@@ -97,6 +97,9 @@ const std::vector<ParamInfo>& params_table() {
        "at the top edge or a ceiling at the bottom, leave them open, walls close them (true: "
        "for enclosed shots, presets/interior.json); false (default): they escape, so that a "
        "frame says nothing of what it does not reach"},
+      {"unseen_scale", &Params::unseen_scale, 0, 1e3, "factor",
+       "unseen_radiance (auto or a number) is multiplied by this; with calibration, the factor "
+       "is solved at each calibration frame instead (and interpolated between them)"},
       {"bounces", &Params::bounces, 1, 16, "count",
        "in-frame bounces of indirect light: bounce k gathers the outgoing radiance of bounce k-1"},
       {"ao_multibounce", &Params::ao_multibounce, 0, 1, "bool",
@@ -207,6 +210,7 @@ json to_json(const Params& p) {
   j["reprojection"] = p.reprojection;
   j["environment"] = p.environment;
   j["panorama"] = p.panorama;
+  j["calibration"] = p.calibration;
   j["view_layer"] = p.view_layer;
   j["input_space"] = p.input_space;
   j["passes"] = p.passes;
@@ -291,6 +295,10 @@ Params params_from_json(const json& j, const std::string& where, Params p) {
       if (!v.is_string())
         fail(where, "key 'panorama' must be a frame pattern of EXR files, got " + v.dump());
       p.panorama = v.get<std::string>();
+    } else if (key == "calibration") {
+      if (!v.is_string())
+        fail(where, "key 'calibration' must be a frame pattern of EXR files, got " + v.dump());
+      p.calibration = v.get<std::string>();
     } else if (key == "view_layer") {
       if (!v.is_string()) fail(where, "key 'view_layer' must be a string, got " + v.dump());
       p.view_layer = v.get<std::string>();
@@ -332,8 +340,9 @@ Params params_from_json(const json& j, const std::string& where, Params p) {
     } else {
       std::vector<std::string> keys;
       for (const auto& i : params_table()) keys.push_back(i.key);
-      keys.insert(keys.end(), {"method", "reprojection", "environment", "panorama", "view_layer",
-                               "input_space", "passes", "outputs", "compression", "tuned"});
+      keys.insert(keys.end(),
+                  {"method", "reprojection", "environment", "panorama", "calibration", "view_layer",
+                   "input_space", "passes", "outputs", "compression", "tuned"});
       fail(where, "unknown key '" + key + "' (known: " + allowed_list(keys) + ")");
     }
   }

@@ -62,6 +62,13 @@ struct Params {
   // "auto": the elevations the frame does not reach escape (false), or are as open as the
   // nearest one it does (true: enclosed shots, presets/interior.json).
   bool unseen_carry = false;
+  // unseen_radiance (auto or a number) is multiplied by this: the fill's level. With
+  // `calibration`, the factor is solved per calibration frame instead (pipeline/calibration.h).
+  double unseen_scale = 1.0;
+  // A frame pattern (or one file) of renders with global illumination, at any sample count and
+  // resolution, of some of the shot's frames (DiffCol and DiffInd): at each, unseen_scale is
+  // the factor that gives hbil's single-frame indirect light the render's mean; "" (off).
+  std::string calibration;
   std::string environment;  // far field: "" (off), equirect EXR path, or "rgb:r,g,b"
   // A frame pattern of panoramic G-buffers from each frame's camera position (Position,
   // DiffCol, DiffDir, Emit, Depth), whose off-screen part lights the gather's empty

@@ -80,6 +80,8 @@ class TemporalChain {
   void set_panorama(const GBuffer& pano, int frame) {
     cache_.set_panorama(pano, float(p_.background_depth), frame);
   }
+  // Params::unseen_scale for the frames processed next (a calibrated level per frame).
+  void set_unseen_scale(double s) { p_.unseen_scale = s; }
 
   // Per-pixel history channels: irradiance (3, only when the outputs gather light), ao, vis,
   // bent vector in world space (3), n; with history_window, two such groups (the chains) and,

@@ -26,6 +26,14 @@ std::vector<float> ImageFile::read(int c) {
   return v;
 }
 
+std::vector<float> ImageFile::read_range(int begin, int end) {
+  std::vector<float> v(size_t(spec_.width) * spec_.height * size_t(end - begin));
+  if (!in_->read_image(0, 0, begin, end, OIIO::TypeDesc::FLOAT, v.data()))
+    throw Error(Exit::input, path_ + ": cannot read channels " + spec_.channelnames[begin] +
+                                 " to " + spec_.channelnames[end - 1] + ": " + in_->geterror());
+  return v;
+}
+
 MemoryChannels::MemoryChannels(std::string name, int width, int height,
                                std::vector<Channel> channels, int x, int y)
     : name_(std::move(name)),

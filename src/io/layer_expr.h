@@ -57,6 +57,9 @@ class ImageFile : public ChannelSource {
   int y() const override { return spec_.y; }
   const std::vector<std::string>& channel_names() const override { return spec_.channelnames; }
   std::vector<float> read(int c) override;
+  // Channels [begin, end) in one pass over the file, interleaved: pixel i's channel c at
+  // [i * (end − begin) + c − begin]. Throws Error(Exit::input).
+  std::vector<float> read_range(int begin, int end);
   const OIIO::ImageSpec& spec() const { return spec_; }
 
  private:

@@ -18,11 +18,6 @@
 
 namespace hbil::pipeline {
 
-namespace {
-
-// Frame `frame` of Params::panorama: the fields RadianceCache::set_panorama reads, with the
-// same pass names as the frames (Exit::missing_pass naming the file and the channels looked
-// for when one is absent).
 GBuffer read_panorama(const std::string& path, int frame, const Params& p) {
   const io::InputFrame in = io::open_frame(path, frame, p);
   std::vector<std::string> fields = {"position", "depth", "diffcol", "diffdir"};
@@ -30,6 +25,8 @@ GBuffer read_panorama(const std::string& path, int frame, const Params& p) {
   if (in.has("emit")) fields.push_back("emit");
   return io::read_fields(in, fields, p);
 }
+
+namespace {
 
 using Clock = std::chrono::steady_clock;
 
@@ -150,6 +147,12 @@ SequenceJob::SequenceJob(SequencePlan plan, const Params& requested) : plan_(std
   }
   // Far field: the environment projected to SH once for the whole run.
   if (!p_.environment.empty()) environment_ = io::load_environment(p_.environment);
+  // Only the gather has a fill to calibrate.
+  if (!p_.calibration.empty() && gathers(p_)) {
+    std::vector<int> all = plan_.preroll;
+    all.insert(all.end(), plan_.frames.begin(), plan_.frames.end());
+    calibration_ = Calibration(p_, plan_.input, all);
+  }
 }
 
 bool SequenceJob::overlaps(Overlap o) const {
@@ -207,6 +210,14 @@ void SequenceJob::run(const Hooks& hooks, Overlap overlap_mode, const SH9* given
   const int step = sequence_step(order);
   std::optional<TemporalChain> chain;
   if (temporal) chain.emplace(p_);
+  // The fill's level per frame (calibration.h), solved before the first frame.
+  std::vector<CalibrationPoint> calibrated;
+  if (!calibration_.empty()) {
+    calibrated = calibration_.solve(p_, plan_.input);
+    if (hooks.calibrated)
+      for (const CalibrationPoint& c : calibrated) hooks.calibrated(c);
+  }
+  Params single = p_;  // without a chain, with the frame's factor
   const bool overlap = overlaps(overlap_mode);
   // A delivered frame keeps its input header alive until its sink is done with it.
   struct Delivery {
@@ -274,10 +285,15 @@ void SequenceJob::run(const Hooks& hooks, Overlap overlap_mode, const SH9* given
         }
         cur.pano = GBuffer{};
       }
+      if (!calibrated.empty()) {
+        const double s = Calibration::scale_at(calibrated, frame);
+        if (chain) chain->set_unseen_scale(s);
+        single.unseen_scale = s;
+      }
       AoFrame result =
           chain ? chain->process(std::move(cur.g), cur.cam, frame,
                                  plan_.cuts.count(frame) > 0 || !gap.empty(), environment, &rep)
-                : (cur.g.unpack(), compute_ao_frame(cur.g, cur.cam, p_, environment,
+                : (cur.g.unpack(), compute_ao_frame(cur.g, cur.cam, single, environment,
                                                     pano ? &*pano : nullptr, frame));
       if (!gap.empty() && rep.cut) rep.cut_reason = gap;
       const double compute_ms = ms(t_compute, Clock::now());

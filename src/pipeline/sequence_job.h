@@ -22,8 +22,14 @@
 #include "hbil/temporal.h"
 #include "io/exr_frame.h"
 #include "io/sequence.h"
+#include "pipeline/calibration.h"
 
 namespace hbil::pipeline {
+
+// Frame `frame` of Params::panorama (the file `path`): the fields RadianceCache::set_panorama
+// reads, with the same pass names as the frames (Exit::missing_pass naming the file and the
+// channels looked for when one is absent).
+GBuffer read_panorama(const std::string& path, int frame, const Params& p);
 
 struct SequencePlan {
   io::FramePattern input{""};
@@ -106,7 +112,12 @@ class SequenceJob {
     // A frame that is done (run's `done`) computed again for the history of the frames
     // after it: its number and seconds.
     std::function<void(int frame, double seconds)> history_only;
+    // Each calibration frame solved (Params::calibration), before the first frame is
+    // computed, on the calling thread.
+    std::function<void(const CalibrationPoint&)> calibrated;
   };
+  // With Params::calibration, the calibration frames that bear on the planned frames are
+  // solved first (calibration.h), and each frame's fill is scaled by its factor.
   // With a temporal chain, a gap in the frame numbers drops the history: a frame whose
   // predecessor at the sequence's step (the smallest difference between its frame numbers)
   // is missing is computed as after a cut, with the reason "frame N missing".
@@ -126,6 +137,7 @@ class SequenceJob {
   std::string why_dropped_, why_scene_;
   SceneScale scene_;
   std::optional<SH9> environment_;
+  Calibration calibration_;
 };
 
 // The step of a sequence's frames, ascending: the smallest difference between consecutive

@@ -1,0 +1,174 @@
+// calibration.cpp: see calibration.h.
+#include "pipeline/calibration.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <optional>
+#include <set>
+
+#include "hbil/ao_frame.h"
+#include "hbil/error.h"
+#include "hbil/gbuffer.h"
+#include "hbil/radiance_cache.h"
+#include "hbil/reduced.h"
+#include "io/exr_frame.h"
+#include "io/layer_expr.h"
+#include "pipeline/sequence_job.h"
+
+namespace hbil::pipeline {
+
+namespace {
+
+// The mean over v's pixels of DiffCol x the search's irradiance (hbil's `indirect`), R + G + B;
+// summed in row order, the same for any thread count.
+double indirect_mean(const ViewGBuffer& v, const GBuffer& g, const HorizonImage& h) {
+  double sum = 0;
+  for (size_t i = 0; i < v.pixels(); ++i) {
+    if (v.is_background(i)) continue;
+    const Vec3 a = g.diffcol[i], e = h.irradiance[i];
+    sum += double(a.x) * e.x + double(a.y) * e.y + double(a.z) * e.z;
+  }
+  return v.pixels() ? sum / double(v.pixels()) : 0.0;
+}
+
+CalibrationPoint solve_frame(const Params& p, const io::FramePattern& input, int c,
+                             const std::string& path) {
+  const auto t0 = std::chrono::steady_clock::now();
+  CalibrationPoint pt;
+  pt.frame = c;
+  pt.path = path;
+  pt.reference = reference_indirect_mean(path);
+  // Frame c alone, computing what `indirect` needs.
+  Params q = p;
+  q.outputs = {"indirect"};
+  q.temporal = false;
+  const io::InputFrame in = io::open_frame(input.path(c), c, q);
+  // Searched on one pixel in 2n x 2n where the run searches one in n x n: a mean needs fewer
+  // pixels than an image.
+  q.search_scale = 2 * effective_search_scale(p, in.spec.width, in.spec.height);
+  GBuffer g = io::read_fields(in, io::fields_needed(in, q), q);
+  const Camera cam = io::find_camera(in, g, q);
+  std::optional<RadianceCache> pano;
+  if (!q.panorama.empty()) {
+    pano.emplace(1);
+    pano->set_panorama(read_panorama(io::FramePattern(q.panorama).path(c), c, q),
+                       float(q.background_depth), c);
+  }
+  const ViewGBuffer v = make_view_gbuffer(g, cam, q);
+  auto mean_at = [&](double s) {
+    q.unseen_scale = s;
+    FrameInputs fi;
+    fi.frame = c;
+    fi.cache = pano ? &*pano : nullptr;
+    ++pt.solves;
+    return indirect_mean(v, g, search_frame(v, g, cam, q, std::move(fi)));
+  };
+  const double T = pt.reference;
+  pt.without = mean_at(0.0);
+  pt.with = mean_at(1.0);
+  double x0 = 0, f0 = pt.without - T, x1 = 1, f1 = pt.with - T;
+  pt.reaches = pt.with - pt.without > 1e-6 * std::max(std::abs(pt.without), 1e-12);
+  if (!pt.reaches) {
+    pt.scale = 1;
+  } else {
+    auto secant = [&] { return std::clamp(x1 - f1 * (x1 - x0) / (f1 - f0), 0.0, kMaxScale); };
+    double x = secant();
+    // One bounce: the fill enters the gather linearly and the secant is exact.
+    while (p.bounces > 1 && pt.solves < kMaxSolves) {
+      const double fx = mean_at(x) - T;
+      if (std::abs(fx) <= 1e-3 * std::abs(T) || fx == f1) break;
+      x0 = x1, f0 = f1, x1 = x, f1 = fx;
+      x = secant();
+    }
+    pt.scale = x;
+  }
+  pt.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return pt;
+}
+
+}  // namespace
+
+double reference_indirect_mean(const std::string& path) {
+  io::ImageFile im(path);
+  const std::vector<int> col = io::layer_channels(im, "DiffCol"),
+                         ind = io::layer_channels(im, "DiffInd");
+  // R, G, B of each (a layer of one channel stands for all three); read in one pass over the
+  // file.
+  auto channel = [](const std::vector<int>& l, size_t k) { return l[std::min(k, l.size() - 1)]; };
+  const size_t nc = 3;
+  int lo = im.spec().nchannels, hi = 0;
+  for (size_t k = 0; k < nc; ++k)
+    for (const std::vector<int>* l : {&col, &ind})
+      lo = std::min(lo, channel(*l, k)), hi = std::max(hi, channel(*l, k) + 1);
+  const std::vector<float> px = im.read_range(lo, hi);
+  const size_t stride = size_t(hi - lo), pixels = size_t(im.width()) * size_t(im.height());
+  double sum = 0;
+  for (size_t i = 0; i < pixels; ++i)
+    for (size_t k = 0; k < nc; ++k) {
+      const float x = px[i * stride + size_t(channel(col, k) - lo)] *
+                      px[i * stride + size_t(channel(ind, k) - lo)];
+      if (std::isfinite(x)) sum += x;
+    }
+  return pixels > 0 ? sum / double(pixels) : 0.0;
+}
+
+Calibration::Calibration(const Params& p, const io::FramePattern& input,
+                         const std::vector<int>& frames)
+    : pattern_(p.calibration) {
+  const io::FramePattern cp(p.calibration);
+  std::vector<int> on_disk;
+  if (cp.is_sequence()) {
+    on_disk = cp.existing_frames();
+  } else if (std::filesystem::exists(cp.text())) {
+    std::optional<int> f = io::frame_number_from_name(cp.text());
+    if (!f) {
+      const std::vector<int> shot = input.is_sequence() ? input.existing_frames() : frames;
+      f = shot.empty() ? frames.front() : shot.front();
+    }
+    on_disk = {*f};
+  }
+  if (on_disk.empty()) throw Error(Exit::input, "calibration " + p.calibration + ": no file found");
+  std::set<int> used;
+  for (int f : frames) {
+    auto after = std::lower_bound(on_disk.begin(), on_disk.end(), f);
+    if (after != on_disk.end()) used.insert(*after);
+    if (after == on_disk.end() || *after != f) {
+      if (after != on_disk.begin()) used.insert(*std::prev(after));
+    }
+  }
+  const std::vector<int> shot = input.is_sequence() ? input.existing_frames() : std::vector<int>{};
+  for (int c : used) {
+    const std::string path = cp.path(c);
+    io::ImageFile im(path);  // Exit::input naming the file
+    io::layer_channels(im, "DiffCol");
+    io::layer_channels(im, "DiffInd");
+    if (input.is_sequence() && !std::binary_search(shot.begin(), shot.end(), c))
+      throw Error(Exit::input, "calibration " + path + " is frame " + std::to_string(c) +
+                                   ", which the input " + input.text() + " does not have");
+    frames_.push_back(c);
+    paths_.push_back(path);
+  }
+}
+
+std::vector<CalibrationPoint> Calibration::solve(const Params& p,
+                                                 const io::FramePattern& input) const {
+  std::vector<CalibrationPoint> points;
+  for (size_t k = 0; k < frames_.size(); ++k)
+    points.push_back(solve_frame(p, input, frames_[k], paths_[k]));
+  return points;
+}
+
+double Calibration::scale_at(const std::vector<CalibrationPoint>& points, int frame) {
+  if (points.empty()) return 1.0;
+  if (frame <= points.front().frame) return points.front().scale;
+  if (frame >= points.back().frame) return points.back().scale;
+  auto b = std::upper_bound(points.begin(), points.end(), frame,
+                            [](int f, const CalibrationPoint& q) { return f < q.frame; });
+  auto a = std::prev(b);
+  const double t = double(frame - a->frame) / double(b->frame - a->frame);
+  return a->scale + t * (b->scale - a->scale);
+}
+
+}  // namespace hbil::pipeline

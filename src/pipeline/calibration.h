@@ -1,0 +1,77 @@
+// calibration.h: the level of the unseen fill (Params::unseen_scale), solved from renders
+// with global illumination of some of the shot's frames (Params::calibration).
+//
+// What the frame does not show lights it through unseen_radiance, whose level no G-buffer
+// tells. A render with global illumination tells its mean, even at one sample per pixel and at
+// a fraction of the shot's resolution: the mean over its pixels of DiffCol x DiffInd (every
+// channel summed). At each calibration frame c, hbil computes frame c alone (no history, as
+// with temporal false) with the fill off and on, and the factor s_c is the one whose
+// indirect light has the render's mean, over each image's own pixels (background adds 0 to
+// both):
+//
+//   s_c = (mean_ref − mean_hbil(s = 0)) / (mean_hbil(s = 1) − mean_hbil(s = 0))
+//
+// exact for one bounce, where the fill enters the gather linearly; with more bounces
+// (Params::bounces) the secant is taken again until the means agree within 0.1 %, at most
+// kMaxSolves computations. s_c is clamped to [0, kMaxScale]; where the fill reaches no pixel
+// (nothing of the frame escapes, or unseen_radiance is 0) it is 1.
+//
+// Frame f uses s interpolated linearly in the frame number between the calibration frames
+// around it, and the nearest one's outside them. Each s_c depends on frame c alone, so a farm
+// chunk uses the factors the whole run uses.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "hbil/params.h"
+#include "io/sequence.h"
+
+namespace hbil::pipeline {
+
+constexpr double kMaxScale = 64.0;
+constexpr int kMaxSolves = 6;
+
+struct CalibrationPoint {
+  int frame = 0;
+  std::string path;              // the calibration render
+  double reference = 0;          // its mean DiffCol x DiffInd (R + G + B)
+  double without = 0, with = 0;  // hbil's mean indirect (R + G + B) with s = 0 and s = 1
+  double scale = 1;              // s_c
+  int solves = 0;                // frames computed to find it
+  bool reaches = true;           // false: the fill reaches no pixel (s_c = 1)
+  double seconds = 0;
+};
+
+class Calibration {
+ public:
+  Calibration() = default;
+  // The calibration frames that bear on `frames` (the run's, pre-roll included): for each,
+  // the nearest calibration frame at or before it and the nearest at or after it, among the
+  // files `p.calibration` finds (a single file: the frame its name numbers, else the shot's
+  // first frame on disk). Opens each one's header and finds DiffCol and DiffInd, so that a
+  // missing file is Error(Exit::input) and a missing pass Error(Exit::missing_pass), both
+  // naming the file, before anything is computed. Nothing is solved yet.
+  Calibration(const Params& p, const io::FramePattern& input, const std::vector<int>& frames);
+
+  bool empty() const { return frames_.empty(); }
+  const std::vector<int>& frames() const { return frames_; }
+
+  // Solves every calibration frame (reading frame c of `input` and its render): `p` as the
+  // run resolved it.
+  std::vector<CalibrationPoint> solve(const Params& p, const io::FramePattern& input) const;
+
+  // The factor of frame f from solved points (ascending frames), as above.
+  static double scale_at(const std::vector<CalibrationPoint>& points, int frame);
+
+ private:
+  std::string pattern_;
+  std::vector<int> frames_;
+  std::vector<std::string> paths_;
+};
+
+// The mean over an image's pixels of DiffCol x DiffInd, R + G + B (non-finite values count as
+// 0). Throws Error(Exit::missing_pass) naming the file for a missing pass.
+double reference_indirect_mean(const std::string& path);
+
+}  // namespace hbil::pipeline

@@ -1,0 +1,226 @@
+// calibration_test.cpp: the unseen fill's level solved from a render with global illumination
+// (pipeline/calibration.h): the factor found gives hbil's indirect light the render's mean,
+// frames between calibration frames interpolate, and bad calibration renders fail by name.
+#include "pipeline/calibration.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "hbil/ao_frame.h"
+#include "hbil/error.h"
+#include "io/exr_frame.h"
+#include "pipeline/sequence_job.h"
+#include "test_util.h"
+
+namespace hbil {
+namespace {
+
+using pipeline::Calibration;
+using pipeline::CalibrationPoint;
+
+const std::string kShot = test::kRoomPoles + "/frame_####.exr";
+
+// A calibration render of w x h pixels: DiffCol 0.5 and DiffInd `ind` everywhere, so that its
+// mean DiffCol x DiffInd, R + G + B, is 1.5 x ind.
+void write_calibration(const std::string& path, float ind, bool with_diffind = true, int w = 64,
+                       int h = 36) {
+  std::vector<std::string> ch = {"ViewLayer.DiffCol.R", "ViewLayer.DiffCol.G",
+                                 "ViewLayer.DiffCol.B"};
+  if (with_diffind)
+    ch.insert(ch.end(), {"ViewLayer.DiffInd.R", "ViewLayer.DiffInd.G", "ViewLayer.DiffInd.B"});
+  test::write_exr(path, w, h, ch, [&](int, int, int c) { return c < 3 ? 0.5f : ind; });
+}
+
+// The defaults resolved on the shot's frame 1, as a run resolves them, with `calibration`.
+Params resolved(const std::string& calibration, int bounces = 1) {
+  Params p;
+  p.calibration = calibration;
+  p.bounces = bounces;
+  return pipeline::SequenceJob(pipeline::plan_sequence(kShot, "1", 0, ""), p).params();
+}
+
+// hbil's `indirect` on frame 1 alone at unseen_scale s, searched as the calibration searches
+// (one pixel in 2 x 2 at this size): its mean over the pixels, R + G + B. Computed through
+// compute_ao_frame and its `indirect` output, not the calibration's own sum.
+double indirect_mean(Params p, double s) {
+  p.unseen_scale = s;
+  p.search_scale = 2;
+  p.temporal = false;
+  const io::FramePattern shot(kShot);
+  const io::InputFrame in = io::open_frame(shot.path(1), 1, p);
+  GBuffer g = io::read_fields(in, io::fields_needed(in, p), p);
+  const Camera cam = io::find_camera(in, g, p);
+  const AoFrame f = compute_ao_frame(g, cam, p);
+  double sum = 0;
+  for (const Vec3& e : f.indirect) sum += double(e.x) + e.y + e.z;
+  return sum / double(f.indirect.size());
+}
+
+TEST(Calibration, TheFactorGivesTheRendersMean) {
+  test::TempDir dir(test::test_name());
+  const io::FramePattern shot(kShot);
+  // A first solve tells hbil's means without and with the fill; the render is then made to
+  // have the mean of the fill at 2.5 times its level.
+  write_calibration(dir / "probe.exr", 0.1f);
+  const Params p = resolved(dir / "probe.exr");
+  const std::vector<CalibrationPoint> probe = Calibration(p, shot, {1}).solve(p, shot);
+  ASSERT_EQ(probe.size(), 1u);
+  EXPECT_NEAR(probe[0].reference, 0.15, 1e-6);
+  ASSERT_TRUE(probe[0].reaches);
+  ASSERT_GT(probe[0].with, probe[0].without * 1.05);  // the fill is a fair part of the light
+  const double target = probe[0].without + 2.5 * (probe[0].with - probe[0].without);
+  write_calibration(dir / "cal.exr", float(target / 1.5));
+  const Params q = resolved(dir / "cal.exr");
+  const std::vector<CalibrationPoint> c = Calibration(q, shot, {1}).solve(q, shot);
+  ASSERT_EQ(c.size(), 1u);
+  EXPECT_EQ(c[0].frame, 1);   // a single file without a frame number: the shot's first frame
+  EXPECT_EQ(c[0].solves, 2);  // one bounce: linear, one secant step
+  EXPECT_NEAR(c[0].scale, 2.5, 1e-3);
+  EXPECT_NEAR(indirect_mean(q, c[0].scale) / c[0].reference, 1.0, 1e-4);
+  EXPECT_NEAR(indirect_mean(q, 0.0) / c[0].without, 1.0, 1e-4);
+}
+
+// With two bounces the fill lights the second bounce too: the secant is iterated until the
+// means agree within 0.1 %.
+TEST(Calibration, WithTwoBouncesTheSecantIsIterated) {
+  test::TempDir dir(test::test_name());
+  const io::FramePattern shot(kShot);
+  write_calibration(dir / "probe.exr", 0.1f);
+  const Params p = resolved(dir / "probe.exr", 2);
+  const CalibrationPoint probe = Calibration(p, shot, {1}).solve(p, shot).at(0);
+  const double target = probe.without + 3.0 * (probe.with - probe.without);
+  write_calibration(dir / "cal.exr", float(target / 1.5));
+  const Params q = resolved(dir / "cal.exr", 2);
+  const CalibrationPoint c = Calibration(q, shot, {1}).solve(q, shot).at(0);
+  EXPECT_GT(c.solves, 2);
+  EXPECT_LE(c.solves, pipeline::kMaxSolves);
+  EXPECT_GT(c.scale, 1.0);
+  EXPECT_NEAR(indirect_mean(q, c.scale) / c.reference, 1.0, 1e-3);
+}
+
+// A render darker than hbil's indirect light without any fill: the factor stops at 0.
+TEST(Calibration, TheFactorIsClampedAtZero) {
+  test::TempDir dir(test::test_name());
+  const io::FramePattern shot(kShot);
+  write_calibration(dir / "cal.exr", 0.0f);
+  const Params p = resolved(dir / "cal.exr");
+  const CalibrationPoint c = Calibration(p, shot, {1}).solve(p, shot).at(0);
+  EXPECT_EQ(c.scale, 0.0);
+}
+
+TEST(Calibration, FramesBetweenCalibrationFramesInterpolate) {
+  std::vector<CalibrationPoint> pts(2);
+  pts[0].frame = 2, pts[0].scale = 2.0;
+  pts[1].frame = 6, pts[1].scale = 4.0;
+  EXPECT_EQ(Calibration::scale_at(pts, 0), 2.0);
+  EXPECT_EQ(Calibration::scale_at(pts, 2), 2.0);
+  EXPECT_EQ(Calibration::scale_at(pts, 3), 2.5);
+  EXPECT_EQ(Calibration::scale_at(pts, 5), 3.5);
+  EXPECT_EQ(Calibration::scale_at(pts, 6), 4.0);
+  EXPECT_EQ(Calibration::scale_at(pts, 9), 4.0);
+  EXPECT_EQ(Calibration::scale_at({pts[1]}, 1), 4.0);
+  EXPECT_EQ(Calibration::scale_at({}, 1), 1.0);
+}
+
+// Only the calibration frames around the run's frames are solved, so that a chunk solves
+// what it needs and uses the factors the whole run uses.
+TEST(Calibration, OnlyTheCalibrationFramesAroundTheRunAreSolved) {
+  test::TempDir dir(test::test_name());
+  for (int f : {1, 4, 8}) write_calibration(dir / ("cal_000" + std::to_string(f) + ".exr"), 0.1f);
+  Params p;
+  p.calibration = dir / "cal_####.exr";
+  const io::FramePattern shot(kShot);
+  using V = std::vector<int>;
+  EXPECT_EQ(Calibration(p, shot, {5, 6}).frames(), (V{4, 8}));
+  EXPECT_EQ(Calibration(p, shot, {4}).frames(), (V{4}));
+  EXPECT_EQ(Calibration(p, shot, {1, 2}).frames(), (V{1, 4}));
+  EXPECT_EQ(Calibration(p, shot, {1, 2, 3, 4, 5, 6, 7, 8}).frames(), (V{1, 4, 8}));
+}
+
+TEST(Calibration, BadCalibrationRendersFailByName) {
+  test::TempDir dir(test::test_name());
+  const io::FramePattern shot(kShot);
+  Params p;
+  write_calibration(dir / "cal_0001.exr", 0.1f, false);
+  p.calibration = dir / "cal_####.exr";
+  test::expect_error([&] { Calibration(p, shot, {1}); }, Exit::missing_pass,
+                     {dir / "cal_0001.exr", "DiffInd"});
+  p.calibration = dir / "none_####.exr";
+  test::expect_error([&] { Calibration(p, shot, {1}); }, Exit::input,
+                     {dir / "none_####.exr", "no file found"});
+  write_calibration(dir / "late_0009.exr", 0.1f);
+  p.calibration = dir / "late_####.exr";
+  test::expect_error([&] { Calibration(p, shot, {8}); }, Exit::input,
+                     {dir / "late_0009.exr", "frame 9", "does not have"});
+}
+
+// The command line: a run calibrated on a render of the shot brings its indirect light to the
+// render's mean, says what it found, and a chunk computes what the whole run does.
+TEST(Calibration, ARunTakesTheRendersMean) {
+  test::TempDir dir(test::test_name());
+  const std::string ref = test::kRoomPoles + "/frame_0001.exr";
+  auto mean = [](const std::string& path, const std::string& layer, const std::string& times) {
+    const test::Pixels px = test::read_pixels(path);
+    double sum = 0;
+    for (const char* c : {".R", ".G", ".B"}) {
+      const int k = px.channel(layer + c), t = times.empty() ? -1 : px.channel(times + c);
+      EXPECT_GE(k, 0) << layer << c;
+      for (int y = 0; y < px.spec.height; ++y)
+        for (int x = 0; x < px.spec.width; ++x)
+          sum += double(px.at(x, y, k)) * (t < 0 ? 1.0 : px.at(x, y, t));
+    }
+    return sum / (double(px.spec.width) * px.spec.height);
+  };
+  const double target = mean(ref, "ViewLayer.DiffInd", "ViewLayer.DiffCol");
+  const std::string set = " --no-display --set 'outputs=[\"indirect\"]'";
+  const test::RunResult plain =
+      test::run_hbil("run " + test::q(ref) + " -o " + test::q(dir / "a.exr") + set, dir.path());
+  ASSERT_EQ(plain.code, 0) << plain.err;
+  const test::RunResult cal =
+      test::run_hbil("run " + test::q(ref) + " -o " + test::q(dir / "b.exr") + set +
+                         " --set calibration=" + test::q(ref),
+                     dir.path());
+  ASSERT_EQ(cal.code, 0) << cal.err;
+  EXPECT_TRUE(test::contains(cal.err, "calibration, frame 1: unseen_scale")) << cal.err;
+  const double before = mean(dir / "a.exr", "indirect", ""),
+               after = mean(dir / "b.exr", "indirect", "");
+  // The run searches every pixel, the calibration one in 2 x 2: their means differ a little.
+  EXPECT_NEAR(after / target, 1.0, 0.02) << before << " " << after << " " << target;
+  EXPECT_GT(std::abs(before / target - 1.0), 0.1) << before << " " << target;
+
+  // Through the temporal chain: its first frame has no history, and the same mean.
+  const test::RunResult chain = test::run_hbil("run " + test::q(kShot) + " --frames 1-2 -o " +
+                                                   test::q(dir / "chain/f_####.exr") + set +
+                                                   " --set calibration=" + test::q(ref),
+                                               dir.path());
+  ASSERT_EQ(chain.code, 0) << chain.err;
+  EXPECT_NEAR(mean(dir / "chain/f_0001.exr", "indirect", "") / target, 1.0, 0.02);
+
+  // Calibration frames 1 and 4: frames 2 and 3 interpolate, in a chunk as in the whole run.
+  write_calibration(dir / "cal_0001.exr", 0.2f);
+  write_calibration(dir / "cal_0004.exr", 0.4f);
+  const std::string seq =
+      " --set temporal=false --set calibration=" + test::q(dir / "cal_####.exr");
+  ASSERT_EQ(test::run_hbil("run " + test::q(kShot) + " --frames 1-4 -o " +
+                               test::q(dir / "whole/f_####.exr") + set + seq,
+                           dir.path())
+                .code,
+            0);
+  const test::RunResult chunk = test::run_hbil(
+      "run " + test::q(kShot) + " --frames 2-3 -o " + test::q(dir / "chunk/f_####.exr") + set + seq,
+      dir.path());
+  ASSERT_EQ(chunk.code, 0) << chunk.err;
+  EXPECT_TRUE(test::contains(chunk.err, "calibration, frame 1:")) << chunk.err;
+  EXPECT_TRUE(test::contains(chunk.err, "calibration, frame 4:")) << chunk.err;
+  for (int f : {2, 3}) {
+    const std::string name = "/f_000" + std::to_string(f) + ".exr";
+    const test::Pixels a = test::read_pixels(dir / ("whole" + name)),
+                       b = test::read_pixels(dir / ("chunk" + name));
+    EXPECT_EQ(a.spec.channelnames, b.spec.channelnames);
+    EXPECT_TRUE(a.data == b.data) << "frame " << f;
+  }
+}
+
+}  // namespace
+}  // namespace hbil
