@@ -12,6 +12,9 @@
 #       HD_<SCENE>, as samples/blender/panorama.py renders them; bench/equal_error.sh
 #       PANORAMA=1 KEEP=k leaves them in k/<scene>/pano) and their mean Cycles render time is
 #       printed, to be counted as hbil's
+#   CAL_STREET=file ...   hbil runs calibrated on that render (`calibration`: any resolution,
+#       e.g. the 256x144 ladder's 1-spp frame 1), whose Cycles render time is printed, to be
+#       counted as hbil's over the frames
 #   PRESET=presets/interior.json   hbil's preset (default: none, the built-in defaults)
 #
 # Each dir holds a 1920x1080 sequence of the scene rendered as samples/README.md says
@@ -57,11 +60,11 @@ render() {  # render SCENE KIND SPP
   t=$(iinfo -v "$dir/frame_0001.exr" | sed -n 's/^ *cycles\.ViewLayer\.render_time: *"\(.*\)"/\1/p')
   echo "$s cycles $kind $n spp: $(seconds "$t") s"
 }
-pano=()
+pano=() cal=()
 hbil_run() {  # hbil_run SCENE DIR
   rm -rf "$work/out"
   "$hbil" run "$2/frame_####.exr" -o "$work/out/frame_####.exr" --no-display "${preset[@]}" \
-    "${pano[@]}" 2>&1 | sed -n "s/.* \([0-9.]*\) s per frame.*/$1 hbil: \1 s per frame/p"
+    "${pano[@]}" "${cal[@]}" 2>&1 | sed -n "s/.* \([0-9.]*\) s per frame.*/$1 hbil: \1 s per frame/p"
 }
 
 for s in ${SCENES:-room_poles courtyard}; do
@@ -84,6 +87,13 @@ for s in ${SCENES:-room_poles courtyard}; do
     done | python3 -c 'import sys
 t = [float(x) for x in sys.stdin]
 print("'"$s"' panorama: %.4f s per frame (Cycles, mean of %d)" % (sum(t) / len(t), len(t)))'
+  fi
+  cal=()
+  cal_var=CAL_${s^^}
+  if [ -n "${!cal_var:-}" ]; then
+    cal=(--set "calibration=${!cal_var}")
+    t=$(iinfo -v "${!cal_var}" | sed -n 's/^ *cycles\.ViewLayer\.render_time: *"\(.*\)"/\1/p')
+    echo "$s calibration render: $(seconds "${t:?${!cal_var} has no render_time}") s (Cycles)"
   fi
   {
     hbil_run "$s" "$dir"

@@ -40,18 +40,19 @@ Params resolved(const std::string& calibration, int bounces = 1) {
   return pipeline::SequenceJob(pipeline::plan_sequence(kShot, "1", 0, ""), p).params();
 }
 
-// hbil's `indirect` on frame 1 alone at unseen_scale s, searched as the calibration searches
-// (one pixel in 2 x 2 at this size): its mean over the pixels, R + G + B. Computed through
-// compute_ao_frame and its `indirect` output, not the calibration's own sum.
+// hbil's `indirect` on frame 1 alone at unseen_scale s, on what the calibration computes (the
+// centre pixel of every 2 x 2 block at this size): its mean over the pixels, R + G + B.
+// Computed through compute_ao_frame and its `indirect` output, not the calibration's own sum.
 double indirect_mean(Params p, double s) {
   p.unseen_scale = s;
-  p.search_scale = 2;
+  p.search_scale = 1;
   p.temporal = false;
   const io::FramePattern shot(kShot);
   const io::InputFrame in = io::open_frame(shot.path(1), 1, p);
   GBuffer g = io::read_fields(in, io::fields_needed(in, p), p);
   const Camera cam = io::find_camera(in, g, p);
-  const AoFrame f = compute_ao_frame(g, cam, p);
+  const auto small = pipeline::subsample(g, cam, 2);
+  const AoFrame f = compute_ao_frame(small.first, small.second, p);
   double sum = 0;
   for (const Vec3& e : f.indirect) sum += double(e.x) + e.y + e.z;
   return sum / double(f.indirect.size());
@@ -79,6 +80,51 @@ TEST(Calibration, TheFactorGivesTheRendersMean) {
   EXPECT_NEAR(c[0].scale, 2.5, 1e-3);
   EXPECT_NEAR(indirect_mean(q, c[0].scale) / c[0].reference, 1.0, 1e-4);
   EXPECT_NEAR(indirect_mean(q, 0.0) / c[0].without, 1.0, 1e-4);
+  // From the frame as a run holds it (colour as half bits), the same point to the bit.
+  const io::InputFrame in = io::open_frame(shot.path(1), 1, q);
+  GBuffer g = io::read_fields(in, io::fields_needed(in, q), q, true);
+  ASSERT_FALSE(g.packed.empty());
+  const Camera cam = io::find_camera(in, g, q);
+  const CalibrationPoint held = Calibration(q, shot, {1}).solve(q, g, cam, 1);
+  EXPECT_EQ(held.scale, c[0].scale);
+  EXPECT_EQ(held.without, c[0].without);
+  EXPECT_EQ(held.with, c[0].with);
+}
+
+// The calibration computes on the pixel at the centre of every m x m block: its camera sees
+// that pixel's ray, and its fields are that pixel's, colour kept as half bits unpacked.
+TEST(Calibration, TheSubsampleSeesEachBlocksCentrePixel) {
+  GBuffer g;
+  g.width = 10, g.height = 6;
+  g.depth.resize(g.pixels());
+  g.normal.assign(g.pixels(), Vec3{0, 0, 1});
+  for (size_t i = 0; i < g.pixels(); ++i) g.depth[i] = float(i);
+  std::vector<std::uint16_t> bits(3 * g.pixels(), 0x3C00);  // 1.0
+  bits[3 * (3 * 10 + 6) + 1] = 0x4000;                      // 2.0, green of pixel (6, 3)
+  g.packed.emplace_back("diffcol", bits);
+  Camera cam;
+  cam.width = 10, cam.height = 6, cam.fx = 12, cam.fy = 11, cam.cx = 5.2, cam.cy = 2.9;
+  for (int m : {2, 3}) {
+    const auto [s, c] = pipeline::subsample(g, cam, m);
+    ASSERT_EQ(s.width, 10 / m);
+    ASSERT_EQ(s.height, 6 / m);
+    EXPECT_EQ(c.width, s.width);
+    const int k = m / 2;
+    for (int y = 0; y < s.height; ++y)
+      for (int x = 0; x < s.width; ++x) {
+        const int fx = m * x + k, fy = m * y + k;
+        EXPECT_EQ(s.depth[size_t(y) * s.width + x], g.depth[size_t(fy) * 10 + fx]);
+        const Vec3d a = c.unproject(x + 0.5, y + 0.5, 2.0),
+                    b = cam.unproject(fx + 0.5, fy + 0.5, 2.0);
+        EXPECT_NEAR(a.x, b.x, 1e-12);
+        EXPECT_NEAR(a.y, b.y, 1e-12);
+        EXPECT_EQ(s.diffcol[size_t(y) * s.width + x].y, fx == 6 && fy == 3 ? 2.0f : 1.0f);
+      }
+  }
+  const auto [same, c1] = pipeline::subsample(g, cam, 1);
+  EXPECT_EQ(same.depth, g.depth);
+  EXPECT_EQ(same.diffcol.size(), g.pixels());
+  EXPECT_EQ(c1.fx, cam.fx);
 }
 
 // With two bounces the fill lights the second bounce too: the secant is iterated until the

@@ -33,23 +33,24 @@ double indirect_mean(const ViewGBuffer& v, const GBuffer& g, const HorizonImage&
   return v.pixels() ? sum / double(v.pixels()) : 0.0;
 }
 
-CalibrationPoint solve_frame(const Params& p, const io::FramePattern& input, int c,
+// Frame c's point from its frame g (as the run reads it, colour packed or not) and camera.
+CalibrationPoint solve_frame(const Params& p, const GBuffer& full, const Camera& full_cam, int c,
                              const std::string& path) {
   const auto t0 = std::chrono::steady_clock::now();
   CalibrationPoint pt;
   pt.frame = c;
   pt.path = path;
   pt.reference = reference_indirect_mean(path);
-  // Frame c alone, computing what `indirect` needs.
+  // Frame c alone, computing what `indirect` needs, on one pixel in 2n x 2n where the run
+  // searches one in n x n: a mean needs fewer pixels than an image.
+  const std::pair<GBuffer, Camera> small =
+      subsample(full, full_cam, 2 * effective_search_scale(p, full.width, full.height));
+  const GBuffer& g = small.first;
+  const Camera& cam = small.second;
   Params q = p;
   q.outputs = {"indirect"};
   q.temporal = false;
-  const io::InputFrame in = io::open_frame(input.path(c), c, q);
-  // Searched on one pixel in 2n x 2n where the run searches one in n x n: a mean needs fewer
-  // pixels than an image.
-  q.search_scale = 2 * effective_search_scale(p, in.spec.width, in.spec.height);
-  GBuffer g = io::read_fields(in, io::fields_needed(in, q), q);
-  const Camera cam = io::find_camera(in, g, q);
+  q.search_scale = 1;
   std::optional<RadianceCache> pano;
   if (!q.panorama.empty()) {
     pano.emplace(1);
@@ -89,6 +90,59 @@ CalibrationPoint solve_frame(const Params& p, const io::FramePattern& input, int
 }
 
 }  // namespace
+
+std::pair<GBuffer, Camera> subsample(const GBuffer& g, const Camera& cam, int m) {
+  if (m <= 1) {
+    GBuffer copy = g;
+    copy.unpack();
+    return {std::move(copy), cam};
+  }
+  GBuffer s;
+  s.width = std::max(1, g.width / m);
+  s.height = std::max(1, g.height / m);
+  const int k = m / 2;  // the pixel at each block's centre
+  auto pick = [&](const auto& field, auto& out) {
+    if (field.size() != g.pixels()) return;
+    out.resize(s.pixels());
+    for (int y = 0; y < s.height; ++y)
+      for (int x = 0; x < s.width; ++x)
+        out[size_t(y) * s.width + x] = field[size_t(std::min(y * m + k, g.height - 1)) * g.width +
+                                             size_t(std::min(x * m + k, g.width - 1))];
+  };
+  pick(g.depth, s.depth);
+  pick(g.backdepth, s.backdepth);
+  pick(g.normal, s.normal);
+  pick(g.position, s.position);
+  pick(g.alpha, s.alpha);
+  pick(g.diffcol, s.diffcol);
+  pick(g.diffdir, s.diffdir);
+  pick(g.emit, s.emit);
+  pick(g.f0, s.f0);
+  pick(g.metallic, s.metallic);
+  for (const auto& [name, bits] : g.packed) {
+    std::vector<Vec3>* out = s.rgb(name);
+    if (!out || bits.size() != 3 * g.pixels()) continue;
+    out->resize(s.pixels());
+    for (int y = 0; y < s.height; ++y)
+      for (int x = 0; x < s.width; ++x) {
+        const size_t i = size_t(std::min(y * m + k, g.height - 1)) * g.width +
+                         size_t(std::min(x * m + k, g.width - 1));
+        (*out)[size_t(y) * s.width + x] =
+            Vec3{half_to_float(bits[3 * i]), half_to_float(bits[3 * i + 1]),
+                 half_to_float(bits[3 * i + 2])};
+      }
+  }
+  // Pixel x of s is pixel m x + k of g, whose centre is at raster m (x + 0.5) + k + 0.5 − m / 2.
+  Camera c = cam;
+  const double shift = k + 0.5 - 0.5 * m;
+  c.width = s.width;
+  c.height = s.height;
+  c.fx = cam.fx / m;
+  c.fy = cam.fy / m;
+  c.cx = (cam.cx - shift) / m;
+  c.cy = (cam.cy - shift) / m;
+  return {std::move(s), c};
+}
 
 double reference_indirect_mean(const std::string& path) {
   io::ImageFile im(path);
@@ -152,11 +206,42 @@ Calibration::Calibration(const Params& p, const io::FramePattern& input,
   }
 }
 
+std::vector<int> Calibration::around(int frame) const {
+  std::vector<int> r;
+  auto after = std::lower_bound(frames_.begin(), frames_.end(), frame);
+  if ((after == frames_.end() || *after != frame) && after != frames_.begin())
+    r.push_back(*std::prev(after));
+  if (after != frames_.end()) r.push_back(*after);
+  return r;
+}
+
+const std::string& Calibration::path(int c) const {
+  auto it = std::lower_bound(frames_.begin(), frames_.end(), c);
+  if (it == frames_.end() || *it != c)
+    throw Error(Exit::failure, "calibration: frame " + std::to_string(c) + " is not planned");
+  return paths_[size_t(it - frames_.begin())];
+}
+
+CalibrationPoint Calibration::solve(const Params& p, const GBuffer& g, const Camera& cam,
+                                    int c) const {
+  return solve_frame(p, g, cam, c, path(c));
+}
+
+CalibrationPoint Calibration::solve(const Params& p, const io::FramePattern& input, int c) const {
+  const auto t0 = std::chrono::steady_clock::now();
+  // The fields the run reads, so that both ways see the same frame.
+  const io::InputFrame in = io::open_frame(input.path(c), c, p);
+  GBuffer g = io::read_fields(in, io::fields_needed(in, p), p);
+  const Camera cam = io::find_camera(in, g, p);
+  CalibrationPoint pt = solve(p, g, cam, c);
+  pt.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return pt;
+}
+
 std::vector<CalibrationPoint> Calibration::solve(const Params& p,
                                                  const io::FramePattern& input) const {
   std::vector<CalibrationPoint> points;
-  for (size_t k = 0; k < frames_.size(); ++k)
-    points.push_back(solve_frame(p, input, frames_[k], paths_[k]));
+  for (int c : frames_) points.push_back(solve(p, input, c));
   return points;
 }
 

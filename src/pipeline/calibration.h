@@ -7,7 +7,8 @@
 // channel summed). At each calibration frame c, hbil computes frame c alone (no history, as
 // with temporal false) with the fill off and on, and the factor s_c is the one whose
 // indirect light has the render's mean, over each image's own pixels (background adds 0 to
-// both):
+// both). hbil computes on the pixel at the centre of every 2n x 2n block where the run
+// searches one pixel in n x n (subsample below): a mean needs fewer pixels than an image.
 //
 //   s_c = (mean_ref − mean_hbil(s = 0)) / (mean_hbil(s = 1) − mean_hbil(s = 0))
 //
@@ -22,8 +23,11 @@
 #pragma once
 
 #include <string>
+#include <utility>
 #include <vector>
 
+#include "hbil/camera.h"
+#include "hbil/gbuffer.h"
 #include "hbil/params.h"
 #include "io/sequence.h"
 
@@ -57,8 +61,16 @@ class Calibration {
   bool empty() const { return frames_.empty(); }
   const std::vector<int>& frames() const { return frames_; }
 
-  // Solves every calibration frame (reading frame c of `input` and its render): `p` as the
-  // run resolved it.
+  // The calibration frames frame f takes its factor from: the nearest at or before it and
+  // the nearest at or after it (one where they are the same, or one is missing).
+  std::vector<int> around(int frame) const;
+
+  // Solves calibration frame c (one of frames()), from `g` and `cam`, its frame as the run
+  // read it (colour fields packed or not), or reading frame c of `input`: `p` as the run resolved
+  // it. Both give the same point.
+  CalibrationPoint solve(const Params& p, const GBuffer& g, const Camera& cam, int c) const;
+  CalibrationPoint solve(const Params& p, const io::FramePattern& input, int c) const;
+  // Every calibration frame, read from `input`.
   std::vector<CalibrationPoint> solve(const Params& p, const io::FramePattern& input) const;
 
   // The factor of frame f from solved points (ascending frames), as above.
@@ -68,7 +80,12 @@ class Calibration {
   std::string pattern_;
   std::vector<int> frames_;
   std::vector<std::string> paths_;
+  const std::string& path(int c) const;
 };
+
+// The pixel at the centre of every m x m block of g (its colour unpacked), and the camera that
+// sees them: what the calibration computes on. m <= 1: g itself, unpacked.
+std::pair<GBuffer, Camera> subsample(const GBuffer& g, const Camera& cam, int m);
 
 // The mean over an image's pixels of DiffCol x DiffInd, R + G + B (non-finite values count as
 // 0). Throws Error(Exit::missing_pass) naming the file for a missing pass.

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <chrono>
 #include <future>
+#include <map>
 #include <optional>
 #include <sstream>
 
@@ -210,13 +211,24 @@ void SequenceJob::run(const Hooks& hooks, Overlap overlap_mode, const SH9* given
   const int step = sequence_step(order);
   std::optional<TemporalChain> chain;
   if (temporal) chain.emplace(p_);
-  // The fill's level per frame (calibration.h), solved before the first frame.
-  std::vector<CalibrationPoint> calibrated;
-  if (!calibration_.empty()) {
-    calibrated = calibration_.solve(p_, plan_.input);
-    if (hooks.calibrated)
-      for (const CalibrationPoint& c : calibrated) hooks.calibrated(c);
-  }
+  // The fill's level per frame (calibration.h): each calibration frame solved when a frame
+  // first needs it, from that frame as read when it is the one, else read for it (the same
+  // point either way).
+  std::map<int, CalibrationPoint> solved;
+  auto calibrated_scale = [&](int frame, const GBuffer& g, const Camera& cam) {
+    std::vector<CalibrationPoint> points;
+    for (int c : calibration_.around(frame)) {
+      auto it = solved.find(c);
+      if (it == solved.end()) {
+        const CalibrationPoint pt =
+            c == frame ? calibration_.solve(p_, g, cam, c) : calibration_.solve(p_, plan_.input, c);
+        if (hooks.calibrated) hooks.calibrated(pt);
+        it = solved.emplace(c, pt).first;
+      }
+      points.push_back(it->second);
+    }
+    return Calibration::scale_at(points, frame);
+  };
   Params single = p_;  // without a chain, with the frame's factor
   const bool overlap = overlaps(overlap_mode);
   // A delivered frame keeps its input header alive until its sink is done with it.
@@ -285,8 +297,8 @@ void SequenceJob::run(const Hooks& hooks, Overlap overlap_mode, const SH9* given
         }
         cur.pano = GBuffer{};
       }
-      if (!calibrated.empty()) {
-        const double s = Calibration::scale_at(calibrated, frame);
+      if (!calibration_.empty()) {
+        const double s = calibrated_scale(frame, cur.g, cur.cam);
         if (chain) chain->set_unseen_scale(s);
         single.unseen_scale = s;
       }
