@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <sstream>
 
 #include "hbil/ao_frame.h"
 #include "hbil/error.h"
@@ -223,17 +224,41 @@ TEST(Calibration, ARunTakesTheRendersMean) {
   const test::RunResult plain =
       test::run_hbil("run " + test::q(ref) + " -o " + test::q(dir / "a.exr") + set, dir.path());
   ASSERT_EQ(plain.code, 0) << plain.err;
-  const test::RunResult cal =
-      test::run_hbil("run " + test::q(ref) + " -o " + test::q(dir / "b.exr") + set +
-                         " --set calibration=" + test::q(ref),
-                     dir.path());
+  const test::RunResult cal = test::run_hbil(
+      "run " + test::q(ref) + " -o " + test::q(dir / "b.exr") + set +
+          " --set calibration=" + test::q(ref) + " --log-json " + test::q(dir / "log.jsonl"),
+      dir.path());
   ASSERT_EQ(cal.code, 0) << cal.err;
   EXPECT_TRUE(test::contains(cal.err, "calibration, frame 1: unseen_scale")) << cal.err;
+  // The log for machines has the factor and both means.
+  bool logged = false;
+  std::istringstream lines(test::read_text(dir / "log.jsonl"));
+  for (std::string line; std::getline(lines, line);) {
+    const nlohmann::json j = nlohmann::json::parse(line);
+    if (j["event"] != "calibration") continue;
+    logged = true;
+    EXPECT_EQ(j["frame"], 1);
+    EXPECT_EQ(j["file"], ref);
+    EXPECT_GT(j["unseen_scale"].get<double>(), 0.0);
+    EXPECT_GT(j["mean_with_fill"].get<double>(), j["mean_without_fill"].get<double>());
+    EXPECT_NEAR(j["reference_mean"].get<double>() / target, 1.0, 1e-6);
+  }
+  EXPECT_TRUE(logged);
   const double before = mean(dir / "a.exr", "indirect", ""),
                after = mean(dir / "b.exr", "indirect", "");
   // The run searches every pixel, the calibration one in 2 x 2: their means differ a little.
   EXPECT_NEAR(after / target, 1.0, 0.02) << before << " " << after << " " << target;
   EXPECT_GT(std::abs(before / target - 1.0), 0.1) << before << " " << target;
+
+  // A calibration render without DiffInd: exit 4 naming it, before any frame is written.
+  write_calibration(dir / "bad.exr", 0.1f, false);
+  const test::RunResult bad = test::run_hbil("run " + test::q(kShot) + " --frames 1-2 -o " +
+                                                 test::q(dir / "bad/f_####.exr") + set +
+                                                 " --set calibration=" + test::q(dir / "bad.exr"),
+                                             dir.path());
+  EXPECT_EQ(bad.code, int(Exit::missing_pass)) << bad.err;
+  EXPECT_TRUE(test::contains(bad.err, dir / "bad.exr")) << bad.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "bad")) << "nothing is written";
 
   // Through the temporal chain: its first frame has no history, and the same mean.
   const test::RunResult chain = test::run_hbil("run " + test::q(kShot) + " --frames 1-2 -o " +
