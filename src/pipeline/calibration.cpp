@@ -100,14 +100,16 @@ std::pair<GBuffer, Camera> subsample(const GBuffer& g, const Camera& cam, int m)
   GBuffer s;
   s.width = std::max(1, g.width / m);
   s.height = std::max(1, g.height / m);
-  const int k = m / 2;  // the pixel at each block's centre
+  const int k = m / 2;               // the pixel at each block's centre
+  auto source = [&](int x, int y) {  // the index in g of pixel (x, y) of s
+    return size_t(std::min(y * m + k, g.height - 1)) * size_t(g.width) +
+           size_t(std::min(x * m + k, g.width - 1));
+  };
   auto pick = [&](const auto& field, auto& out) {
     if (field.size() != g.pixels()) return;
     out.resize(s.pixels());
     for (int y = 0; y < s.height; ++y)
-      for (int x = 0; x < s.width; ++x)
-        out[size_t(y) * s.width + x] = field[size_t(std::min(y * m + k, g.height - 1)) * g.width +
-                                             size_t(std::min(x * m + k, g.width - 1))];
+      for (int x = 0; x < s.width; ++x) out[size_t(y) * s.width + x] = field[source(x, y)];
   };
   pick(g.depth, s.depth);
   pick(g.backdepth, s.backdepth);
@@ -125,11 +127,9 @@ std::pair<GBuffer, Camera> subsample(const GBuffer& g, const Camera& cam, int m)
     out->resize(s.pixels());
     for (int y = 0; y < s.height; ++y)
       for (int x = 0; x < s.width; ++x) {
-        const size_t i = size_t(std::min(y * m + k, g.height - 1)) * g.width +
-                         size_t(std::min(x * m + k, g.width - 1));
+        const size_t i = 3 * source(x, y);
         (*out)[size_t(y) * s.width + x] =
-            Vec3{half_to_float(bits[3 * i]), half_to_float(bits[3 * i + 1]),
-                 half_to_float(bits[3 * i + 2])};
+            Vec3{half_to_float(bits[i]), half_to_float(bits[i + 1]), half_to_float(bits[i + 2])};
       }
   }
   // Pixel x of s is pixel m x + k of g, whose centre is at raster m (x + 0.5) + k + 0.5 − m / 2.
