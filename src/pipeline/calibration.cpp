@@ -89,6 +89,17 @@ CalibrationPoint solve_frame(const Params& p, const GBuffer& full, const Camera&
   return pt;
 }
 
+// Of `sorted` (ascending), the nearest at or before `frame` and the nearest at or after it:
+// one where they are the same or one is missing.
+std::vector<int> bracket(const std::vector<int>& sorted, int frame) {
+  std::vector<int> r;
+  auto after = std::lower_bound(sorted.begin(), sorted.end(), frame);
+  if ((after == sorted.end() || *after != frame) && after != sorted.begin())
+    r.push_back(*std::prev(after));
+  if (after != sorted.end()) r.push_back(*after);
+  return r;
+}
+
 }  // namespace
 
 std::pair<GBuffer, Camera> subsample(const GBuffer& g, const Camera& cam, int m) {
@@ -185,13 +196,8 @@ Calibration::Calibration(const Params& p, const io::FramePattern& input,
   }
   if (on_disk.empty()) throw Error(Exit::input, "calibration " + p.calibration + ": no file found");
   std::set<int> used;
-  for (int f : frames) {
-    auto after = std::lower_bound(on_disk.begin(), on_disk.end(), f);
-    if (after != on_disk.end()) used.insert(*after);
-    if (after == on_disk.end() || *after != f) {
-      if (after != on_disk.begin()) used.insert(*std::prev(after));
-    }
-  }
+  for (int f : frames)
+    for (int c : bracket(on_disk, f)) used.insert(c);
   const std::vector<int> shot = input.is_sequence() ? input.existing_frames() : std::vector<int>{};
   for (int c : used) {
     const std::string path = cp.path(c);
@@ -207,12 +213,7 @@ Calibration::Calibration(const Params& p, const io::FramePattern& input,
 }
 
 std::vector<int> Calibration::around(int frame) const {
-  std::vector<int> r;
-  auto after = std::lower_bound(frames_.begin(), frames_.end(), frame);
-  if ((after == frames_.end() || *after != frame) && after != frames_.begin())
-    r.push_back(*std::prev(after));
-  if (after != frames_.end()) r.push_back(*after);
-  return r;
+  return bracket(frames_, frame);
 }
 
 const std::string& Calibration::path(int c) const {
