@@ -58,13 +58,22 @@ CalibrationPoint solve_frame(const Params& p, const GBuffer& full, const Camera&
                        float(q.background_depth), c);
   }
   const ViewGBuffer v = make_view_gbuffer(g, cam, q);
+  // The temporal chain feeds each frame the indirect light of the frames before it, one more
+  // bounce (Params::feedback). The solve stands in for it by feeding the frame its own indirect
+  // light once: the mean the run reaches after a few frames, not the one its first frame has.
+  const bool fed = p.temporal && p.feedback;
   auto mean_at = [&](double s) {
     q.unseen_scale = s;
-    FrameInputs fi;
-    fi.frame = c;
-    fi.cache = pano ? &*pano : nullptr;
+    HorizonImage h;
+    for (int pass = 0; pass < (fed ? 2 : 1); ++pass) {
+      FrameInputs fi;
+      fi.frame = c;
+      fi.cache = pano ? &*pano : nullptr;
+      if (pass > 0) fi.feedback = std::move(h.irradiance);
+      h = search_frame(v, g, cam, q, std::move(fi));
+    }
     ++pt.solves;
-    return indirect_mean(v, g, search_frame(v, g, cam, q, std::move(fi)));
+    return indirect_mean(v, g, h);
   };
   const double T = pt.reference;
   pt.without = mean_at(0.0);

@@ -14,8 +14,14 @@
 //
 // exact for one bounce, where the fill enters the gather linearly; with more bounces
 // (Params::bounces) the secant is taken again until the means agree within 0.1 %, at most
-// kMaxSolves computations. s_c is clamped to [0, kMaxScale]; where the fill reaches no pixel
-// (nothing of the frame escapes, or unseen_radiance is 0) it is 1.
+// kMaxSolves solves.
+//
+// With the temporal chain and its feedback (Params::temporal, Params::feedback), each frame the
+// run computes after the first is fed the indirect light of the frames before it. A solve then
+// computes frame c twice, the second time fed the first's indirect light, so that s_c brings
+// the chain's frames to the render's mean once they have a history (the first frame, with
+// none, stays below it). Still linear in s for one bounce. s_c is clamped to [0, kMaxScale]; where
+// the fill reaches no pixel (nothing of the frame escapes, or unseen_radiance is 0) it is 1.
 //
 // Frame f uses s interpolated linearly in the frame number between the calibration frames
 // around it, and the nearest one's outside them. Each s_c depends on frame c alone, so a farm
@@ -42,7 +48,7 @@ struct CalibrationPoint {
   double reference = 0;          // its mean DiffCol x DiffInd (R + G + B)
   double without = 0, with = 0;  // hbil's mean indirect (R + G + B) with s = 0 and s = 1
   double scale = 1;              // s_c
-  int solves = 0;                // frames computed to find it
+  int solves = 0;                // values of s tried to find it (each one or two searches)
   bool reaches = true;           // false: the fill reaches no pixel (s_c = 1)
   double seconds = 0;
 };
