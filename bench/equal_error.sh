@@ -16,7 +16,8 @@
 #   CALIBRATE=1 ...                             hbil calibrated (`calibration`) on the
 #                                               ladder's 1-spp full-GI render of the first
 #                                               frame, whose Cycles render time, spread over
-#                                               the frames, counts as hbil's
+#                                               the frames, counts as hbil's (hbil bench
+#                                               counts it)
 #   SCENES="hall street" SAMPLES_DIR=/tmp/heldout FRAMES=1-4 ...
 #                                               scenes not committed: SAMPLES_DIR/S/ holds
 #                                               their reference, rendered as the committed
@@ -149,16 +150,11 @@ for s in $scenes; do
     cp "$work/$s/pano/seconds" "$work/$s/bench_panorama"
   fi
   cal=()
-  rm -f "$work/$s/bench_calibration"
   if [ -n "${CALIBRATE:-}" ]; then
+    # bench counts the calibration render's own time (its header's) over the frames.
     [[ " $ladder " == *" 1 "* ]] || { echo "equal_error.sh: CALIBRATE needs 1 in LADDER" >&2; exit 2; }
     c=$(printf '%s/%s/full_spp1/frame_%04d.exr' "$work" "$s" "$first_frame")
     cal=(--set "calibration=$c")
-    t=$(iinfo -v "$c" | sed -n 's/^ *cycles\.ViewLayer\.render_time: *"\(.*\)"/\1/p')
-    [ -n "$t" ] || { echo "equal_error.sh: $c has no render_time" >&2; exit 1; }
-    python3 -c 'import sys
-t = sum(float(p) * 60 ** k for k, p in enumerate(reversed(sys.argv[1].split(":")))) + 0.005
-print("%.4f" % (t / int(sys.argv[2])))' "$t" "$n_frames" > "$work/$s/bench_calibration"
   fi
   log "$s: hbil bench, $runs runs"
   "$hbil" bench "$in" -o "$work/$s/bench" -q --runs "$runs" --preset "$preset" "${pano[@]}" "${cal[@]}" \
@@ -177,13 +173,16 @@ for s in scenes:
     c = j["configurations"][0]
     p, t_run = c["layers"]["composite"]["psnr"], c["seconds_per_frame"]
     # With PANORAMA, the panoramas' render time per frame is part of hbil's cost; with
-    # CALIBRATE, the calibration render's, spread over the frames.
+    # CALIBRATE, the calibration render's, spread over the frames (bench counts it).
     def extra(name):
         try:
             return float(open("%s/%s/bench_%s" % (work, s, name)).read())
         except OSError:
             return 0.0
-    t_pano, t_cal = extra("panorama"), extra("calibration")
+    t_pano = extra("panorama")
+    t_cal = c.get("calibration_render_seconds_per_frame", 0.0)
+    if t_cal is None:
+        sys.exit("equal_error.sh: %s: the calibration render has no render time" % s)
     t_h = t_run + t_pano + t_cal
     full = {r["samples"]: r for r in j["renders"]}
     direct = {r["samples"]: r for r in jd["renders"]}
@@ -204,7 +203,8 @@ for s in scenes:
         spp, t_d = r["samples"], direct[r["samples"]]["seconds_per_frame"]
         how = "beyond the ladder: bound at %d spp" % r["samples"]
     bound = c.get("equal_error_speedup_bound", "")
-    t_c = c["equal_error_speedup"] * t_run  # bench's speedup is against hbil's run alone
+    # bench's speedup is against hbil's run and the calibration render's share
+    t_c = c["equal_error_speedup"] * (t_run + t_cal)
     sp = t_c / t_h
     summary.append("| %s | %.2f | %.3f | %s%.3f | %s%.1f | %.1f (%s) | %.3f | %.3f | %.2f |" % (
         s, p, t_h, bound, t_c, bound, sp, spp, how, t_d, t_c - t_d, (t_c - t_d) / t_h))

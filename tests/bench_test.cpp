@@ -168,6 +168,59 @@ TEST(BenchSpeedup, LogTimeInterpolatedOnTheRenderCurve) {
   EXPECT_EQ(r.configs[2].speedup_bound, "<");
 }
 
+// A calibration render's time is part of what a configuration costs: the Pareto front and the
+// speedup take seconds_per_frame plus it.
+TEST(BenchSpeedup, TheCalibrationRendersTimeIsCounted) {
+  BenchResult r;
+  r.layers = {"composite"};
+  r.configs = {config("a", 1.0, 22), config("b", 0.5, 19), config("c", 0.1, 21.5)};
+  r.configs[1].calibration_seconds = 0.6;  // 1.1 s in all: slower than a and c, and worse
+  r.configs[2].calibration_seconds = 0.1;
+  pipeline::mark_pareto(r);
+  EXPECT_TRUE(r.configs[0].pareto["composite"]);
+  EXPECT_FALSE(r.configs[1].pareto["composite"]);
+  EXPECT_TRUE(r.configs[2].pareto["composite"]);
+  for (auto [t, p] : {std::pair{2.0, 23.0}, std::pair{1.0, 20.0}}) {
+    RenderResult x;
+    x.seconds_per_frame = t;
+    x.error = with_mse(std::pow(10.0, -p / 10));
+    r.renders.push_back(x);
+  }
+  pipeline::equal_error_speedups(r);
+  EXPECT_NEAR(r.configs[2].speedup, 5 * std::sqrt(2.0), 1e-9);  // sqrt(2) s over 0.2 s
+  r.configs[2].calibration_seconds = -1;  // a render without a time: not counted
+  pipeline::equal_error_speedups(r);
+  EXPECT_NEAR(r.configs[2].speedup, 10 * std::sqrt(2.0), 1e-9);
+}
+
+// bench reads the calibration render's time from its header (room_poles' frame 1: 01:21.59)
+// and spreads it over the frames; the speedup counts it. (The render curve is the static
+// camera's frames, another shot: a finite PSNR, a curve of one point.)
+TEST(BenchRun, CalibrationRenderTimeFromItsHeader) {
+  test::TempDir dir(test::test_name());
+  const std::string in = test::kRoomPoles + "/frame_####.exr";
+  const std::string cal = test::kRoomPoles + "/frame_0001.exr";
+  const auto b = test::run_hbil(
+      "bench " + test::q(in) + " -o " + test::q(dir / "bench") + " --frames 1-2 --ref " +
+          test::q("composite=" + in + ":Combined") + " --render " +
+          test::q(test::kSourceDir + "/samples/room_static/frame_####.exr") +
+          " --set calibration=" + test::q(cal),
+      dir.path());
+  ASSERT_EQ(b.code, 0) << b.err;
+  EXPECT_TRUE(contains(b.out, "+cal s")) << b.out;
+  std::ifstream jf(dir / "bench/bench.json");
+  const nlohmann::json j = nlohmann::json::parse(jf);
+  const nlohmann::json& c = j["configurations"][0];
+  const double cal_s = c["calibration_render_seconds_per_frame"].get<double>();
+  EXPECT_NEAR(cal_s, (81.59 + 0.005) / 2, 1e-9);
+  // One render: the speedup is bound at its time per frame.
+  const double render_s = j["renders"][0]["seconds_per_frame"].get<double>();
+  EXPECT_TRUE(c.contains("equal_error_speedup_bound"));
+  EXPECT_NEAR(
+      c["equal_error_speedup"].get<double>() * (c["seconds_per_frame"].get<double>() + cal_s),
+      render_s, 1e-9 * render_s);
+}
+
 // The bench's errors are `hbil compare`'s: ao (32-bit in the file) to 1e-9 dB; composite
 // (half in the file) within 0.01 dB, on R, G, B.
 TEST(BenchRun, ErrorsEqualCompareOnRunOutput) {

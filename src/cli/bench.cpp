@@ -2,6 +2,7 @@
 // on the user's own shot (pipeline/bench.h).
 #include "pipeline/bench.h"
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
@@ -48,12 +49,25 @@ void bench(const BenchOptions& o) {
   });
   pipeline::write_bench(r, o.out_dir);
   // The table: a row per configuration; per layer its PSNR, * on the Pareto front.
+  // With a calibration, its renders' time per frame is part of the cost (the Pareto fronts and
+  // the speedup count it): a column of its own.
+  const bool calibrated = std::any_of(r.configs.begin(), r.configs.end(),
+                                      [](const auto& c) { return !c.params.calibration.empty(); });
   std::printf("%-32s %9s", "configuration", "s/frame");
+  if (calibrated) std::printf(" %9s", "+cal s");
   for (const std::string& l : r.layers) std::printf(" %12s", (l + " dB").c_str());
   if (!r.renders.empty()) std::printf(" %14s", "speedup");
   std::printf("\n");
   for (const pipeline::ConfigResult& c : r.configs) {
     std::printf("%-32s %9.3f", c.name.c_str(), c.seconds_per_frame);
+    if (calibrated) {
+      if (c.params.calibration.empty())
+        std::printf(" %9s", "-");
+      else if (c.calibration_seconds >= 0)
+        std::printf(" %9.4f", c.calibration_seconds);
+      else
+        std::printf(" %9s", "unknown");
+    }
     for (const std::string& l : r.layers)
       std::printf(" %11.2f%s", c.errors.at(l).psnr(), c.pareto.at(l) ? "*" : " ");
     if (!r.renders.empty()) {
@@ -83,6 +97,11 @@ void bench(const BenchOptions& o) {
       "* on the layer's Pareto front; %s; written to %s (bench.json, bench.csv, "
       "chart.svg, chart.png)\n",
       r.machine.c_str(), o.out_dir.c_str());
+  if (calibrated)
+    std::printf(
+        "+cal s: the calibration renders' own time from their headers, per frame, counted in "
+        "the Pareto fronts, the chart and the speedup (unknown: a render without one, not "
+        "counted)\n");
 }
 
 }  // namespace

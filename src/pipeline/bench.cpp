@@ -109,6 +109,23 @@ double parse_render_time(const std::string& t) {
   }
 }
 
+namespace {
+
+// The calibration renders' own time from their headers, over `frames` frames; -1 where one
+// has none.
+double calibration_render_seconds(const Calibration& c, size_t frames) {
+  double sum = 0;
+  for (const std::string& path : c.paths()) {
+    io::ImageFile f(path);
+    const double t = parse_render_time(cycles_attribute(f.spec(), ".render_time"));
+    if (t < 0) return -1;
+    sum += t + 0.005;  // truncated to 10 ms, as for --render
+  }
+  return frames ? sum / double(frames) : 0;
+}
+
+}  // namespace
+
 BenchReference parse_bench_reference(const std::string& text) {
   const size_t eq = text.find('=');
   const size_t colon = text.rfind(':');
@@ -173,11 +190,11 @@ std::vector<BenchConfig> expand_sweeps(const std::vector<BenchConfig>& bases,
 void mark_pareto(BenchResult& r) {
   for (const std::string& layer : r.layers)
     for (ConfigResult& a : r.configs) {
-      const double ta = a.seconds_per_frame, pa = a.errors[layer].psnr();
+      const double ta = a.cost_per_frame(), pa = a.errors[layer].psnr();
       bool beaten = false;
       for (ConfigResult& b : r.configs) {
         if (&a == &b) continue;
-        const double tb = b.seconds_per_frame, pb = b.errors[layer].psnr();
+        const double tb = b.cost_per_frame(), pb = b.errors[layer].psnr();
         if (tb <= ta && pb >= pa && (tb < ta || pb > pa)) beaten = true;
       }
       a.pareto[layer] = !beaten;
@@ -194,7 +211,7 @@ void equal_error_speedups(BenchResult& r) {
   if (curve.empty()) return;
   for (ConfigResult& c : r.configs) {
     const auto it = c.errors.find(r.composite);
-    if (it == c.errors.end() || c.seconds_per_frame <= 0) continue;
+    if (it == c.errors.end() || c.cost_per_frame() <= 0) continue;
     const double p = it->second.psnr();
     c.speedup_bound.clear();
     // The first render at or above our PSNR; log time linear in PSNR between neighbours.
@@ -213,7 +230,7 @@ void equal_error_speedups(BenchResult& r) {
       const double u = p1 > p0 ? (p - p0) / (p1 - p0) : 1.0;
       t = std::exp(std::log(t0) + u * (std::log(t1) - std::log(t0)));
     }
-    c.speedup = t / c.seconds_per_frame;
+    c.speedup = t / c.cost_per_frame();
   }
 }
 
@@ -300,6 +317,7 @@ BenchResult run_bench(const BenchSettings& s,
     cr.name = c.name;
     cr.params = c.params;
     const SequenceJob job(plan, resolved[ci]);
+    cr.calibration_seconds = calibration_render_seconds(job.calibration(), plan.frames.size());
     std::vector<TemporalChange> ours(s.refs.size()), theirs(s.refs.size());
     SequenceJob::Hooks hooks;
     hooks.deliver = [&](FrameResult& fr) {
@@ -473,13 +491,19 @@ void write_bench(const BenchResult& r, const std::string& dir) {
   j["seconds_per_frame"] =
       "wall clock per frame as hbil run --no-display with the layers judged (reading and "
       "writing overlapping the computing), median of the runs; stages_ms: medians over frames "
-      "and runs";
+      "and runs; calibration_render_seconds_per_frame: the calibration renders' own time from "
+      "their headers over the frames (null: a render without one), added to seconds_per_frame "
+      "for the Pareto fronts, the chart and equal_error_speedup";
   j["configurations"] = nlohmann::json::array();
   for (const ConfigResult& c : r.configs) {
     nlohmann::json jc;
     jc["name"] = c.name;
     jc["parameters"] = to_json(c.params);
     jc["seconds_per_frame"] = c.seconds_per_frame;
+    if (!c.params.calibration.empty())
+      jc["calibration_render_seconds_per_frame"] = c.calibration_seconds >= 0
+                                                       ? nlohmann::json(c.calibration_seconds)
+                                                       : nlohmann::json(nullptr);
     jc["runs"] = c.run_seconds;
     jc["cuts"] = nlohmann::json::array();
     for (const auto& [frame, why] : c.cuts)
@@ -593,9 +617,9 @@ void write_bench(const BenchResult& r, const std::string& dir) {
     std::vector<const ConfigResult*> order;
     for (const ConfigResult& c : r.configs) order.push_back(&c);
     std::sort(order.begin(), order.end(),
-              [](auto a, auto b) { return a->seconds_per_frame < b->seconds_per_frame; });
+              [](auto a, auto b) { return a->cost_per_frame() < b->cost_per_frame(); });
     for (const ConfigResult* c : order) {
-      ChartSeries::Point pt{c->seconds_per_frame, c->errors.at(layer).psnr(), c->name,
+      ChartSeries::Point pt{c->cost_per_frame(), c->errors.at(layer).psnr(), c->name,
                             c->pareto.at(layer)};
       (c->pareto.at(layer) ? front : others).points.push_back(pt);
     }

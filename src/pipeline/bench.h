@@ -7,6 +7,7 @@
 // (interpolated on its curve) over the configuration's time.
 #pragma once
 
+#include <algorithm>
 #include <functional>
 #include <map>
 #include <string>
@@ -85,6 +86,13 @@ struct ConfigResult {
   StageTimes times;                 // medians over frames and runs
   std::vector<double> run_seconds;  // each run's wall clock per frame
   double seconds_per_frame = 0;     // median of run_seconds
+  // With Params::calibration: the calibration renders' own time (their headers' render
+  // time, as for --render) over the frames, part of what the configuration costs; -1 where
+  // a calibration render has none (then not counted).
+  double calibration_seconds = 0;
+  // What a frame costs: seconds_per_frame and the calibration renders' share. The Pareto
+  // fronts, the chart and the equal-error speedup take this.
+  double cost_per_frame() const { return seconds_per_frame + std::max(0.0, calibration_seconds); }
   // By reference name (BenchReference::name):
   std::map<std::string, ErrorStats> errors;         // over all frames
   std::map<std::string, std::vector<double>> psnr;  // per frame

@@ -66,6 +66,7 @@ class Calibration {
 
   bool empty() const { return frames_.empty(); }
   const std::vector<int>& frames() const { return frames_; }
+  const std::vector<std::string>& paths() const { return paths_; }  // frames()' files
 
   // The calibration frames frame f takes its factor from: the nearest at or before it and
   // the nearest at or after it (one where they are the same, or one is missing).

@@ -87,6 +87,9 @@ class SequenceJob {
   const SequencePlan& plan() const { return plan_; }
   const Params& params() const { return p_; }
   const io::InputFrame& first() const { return first_; }
+  // The calibration frames the run solves (empty without Params::calibration, or where the
+  // outputs gather no light).
+  const Calibration& calibration() const { return calibration_; }
   // The missing-pass message of the first "auto" output left out ("" when none was).
   const std::string& why_dropped() const { return why_dropped_; }
   // What gather_radius and thickness "auto" became, and from what ("" when neither was).
