@@ -267,6 +267,15 @@ TEST(Calibration, ARunTakesTheRendersMean) {
   EXPECT_NEAR(after / target, 1.0, 0.02) << before << " " << after << " " << target;
   EXPECT_GT(std::abs(before / target - 1.0), 0.1) << before << " " << target;
 
+  // The same frame alone through the temporal chain: a run of one frame has no history to
+  // feed back, so the factor is solved as for a frame alone, and gives the same mean.
+  const test::RunResult one =
+      test::run_hbil("run " + test::q(ref) + " -o " + test::q(dir / "c.exr") + set +
+                         " --set calibration=" + test::q(ref),
+                     dir.path());
+  ASSERT_EQ(one.code, 0) << one.err;
+  EXPECT_NEAR(mean(dir / "c.exr", "indirect", "") / target, 1.0, 0.02);
+
   // A calibration render without DiffInd: exit 4 naming it, before any frame is written.
   write_calibration(dir / "bad.exr", 0.1f, false);
   const test::RunResult bad = test::run_hbil("run " + test::q(kShot) + " --frames 1-2 -o " +

@@ -20,8 +20,9 @@
 // run computes after the first is fed the indirect light of the frames before it. A solve then
 // computes frame c twice, the second time fed the first's indirect light, so that s_c brings
 // the chain's frames to the render's mean once they have a history (the first frame, with
-// none, stays below it). Still linear in s for one bounce. s_c is clamped to [0, kMaxScale]; where
-// the fill reaches no pixel (nothing of the frame escapes, or unseen_radiance is 0) it is 1.
+// none, stays below it). SequenceJob turns that off for a run of one frame, which has none. Still
+// linear in s for one bounce. s_c is clamped to [0, kMaxScale]; where the fill reaches no pixel
+// (nothing of the frame escapes, or unseen_radiance is 0) it is 1.
 //
 // Frame f uses s interpolated linearly in the frame number between the calibration frames
 // around it, and the nearest one's outside them. Each s_c depends on frame c alone, so a farm

@@ -215,13 +215,17 @@ void SequenceJob::run(const Hooks& hooks, Overlap overlap_mode, const SH9* given
   // first needs it, from that frame as read when it is the one, else read for it (the same
   // point either way).
   std::map<int, CalibrationPoint> solved;
+  // A run of one frame (no pre-roll) never feeds a frame its history: its factor is solved
+  // without the chain's feedback, as that frame is computed.
+  Params solve_p = p_;
+  if (plan_.frames.size() + plan_.preroll.size() == 1) solve_p.feedback = false;
   auto calibrated_scale = [&](int frame, const GBuffer& g, const Camera& cam) {
     std::vector<CalibrationPoint> points;
     for (int c : calibration_.around(frame)) {
       auto it = solved.find(c);
       if (it == solved.end()) {
-        const CalibrationPoint pt =
-            c == frame ? calibration_.solve(p_, g, cam, c) : calibration_.solve(p_, plan_.input, c);
+        const CalibrationPoint pt = c == frame ? calibration_.solve(solve_p, g, cam, c)
+                                               : calibration_.solve(solve_p, plan_.input, c);
         if (hooks.calibrated) hooks.calibrated(pt);
         it = solved.emplace(c, pt).first;
       }
