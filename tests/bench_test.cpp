@@ -389,6 +389,18 @@ TEST(Tune, WritesAPresetNoWorseThanTheBase) {
       "tune " + test::q(in) + refs + " --budget 1e-6 -q -o " + test::q(dir / "n.json"), dir.path());
   ASSERT_EQ(none.code, 0) << none.err;
   EXPECT_TRUE(contains(none.out, "none was")) << none.out;
+
+  // A calibration render's time counts against the budget: frame 1's header says 01:21.59,
+  // more than 10 s a frame, whatever hbil's own time.
+  const auto cal =
+      test::run_hbil("tune " + test::q(in) + refs + " --keys slices --budget 10" +
+                         " --set calibration=" + test::q(test::kRoomPoles + "/frame_0001.exr") +
+                         " -q -o " + test::q(dir / "c.json"),
+                     dir.path());
+  ASSERT_EQ(cal.code, 0) << cal.err;
+  EXPECT_TRUE(contains(cal.out, "none was")) << cal.out;
+  std::ifstream cf(dir / "c.json");
+  EXPECT_GT(nlohmann::json::parse(cf)["tuned"]["seconds_per_frame"].get<double>(), 81.59);
 }
 
 // --keys: only those keys are tried (every step changes one of them), the preset says so; a

@@ -55,7 +55,7 @@ void tune(const TuneOptions& o) {
   io::write_file(o.output, r.preset.dump(2) + "\n");
   std::printf("%s: %s, %s %.2f dB at %.3f s per frame (%zu configurations measured)\n",
               o.output.c_str(), r.goal.c_str(), r.layer.c_str(), r.chosen.errors.at(r.layer).psnr(),
-              r.chosen.seconds_per_frame, r.steps.size());
+              r.chosen.cost_per_frame(), r.steps.size());
 }
 
 }  // namespace

@@ -84,18 +84,18 @@ TuneResult run_tune(const TuneSettings& s,
     b.runs = 1;
     const BenchResult r = run_bench(b);
     const ConfigResult& c = measured.emplace(key, r.configs.front()).first->second;
-    out.steps.push_back({change, c.errors.at(out.layer).psnr(), c.seconds_per_frame, false});
+    out.steps.push_back({change, c.errors.at(out.layer).psnr(), c.cost_per_frame(), false});
     if (progress) {
       char line[256];
       std::snprintf(line, sizeof line, "tune: %-28s %s %.2f dB, %.3f s per frame", change.c_str(),
-                    out.layer.c_str(), out.steps.back().psnr, c.seconds_per_frame);
+                    out.layer.c_str(), out.steps.back().psnr, c.cost_per_frame());
       progress(line);
     }
     return c;
   };
   auto psnr = [&](const ConfigResult& c) { return c.errors.at(out.layer).psnr(); };
   auto feasible = [&](const ConfigResult& c) {
-    return s.budget <= 0 || c.seconds_per_frame <= s.budget;
+    return s.budget <= 0 || c.cost_per_frame() <= s.budget;
   };
   // Coordinate search: `better(a, b)` says whether a should replace b.
   auto search = [&](Params start,
@@ -134,19 +134,19 @@ TuneResult run_tune(const TuneSettings& s,
   };
   auto more_accurate = [&](const ConfigResult& a, const ConfigResult& b) {
     if (feasible(a) != feasible(b)) return feasible(a);
-    if (!feasible(a)) return a.seconds_per_frame < b.seconds_per_frame;
+    if (!feasible(a)) return a.cost_per_frame() < b.cost_per_frame();
     return psnr(a) > psnr(b) + 1e-9;
   };
   auto [params, best] = search(base, more_accurate);
   if (s.budget > 0) {
     out.goal = "the most accurate " + out.layer + " within " + number(s.budget) + " s per frame";
     if (!feasible(best))
-      out.goal += " (none was: the fastest found is " + number(best.seconds_per_frame) + " s)";
+      out.goal += " (none was: the fastest found is " + number(best.cost_per_frame()) + " s)";
   } else {
     const double floor_db = psnr(best) - s.tolerance_db;
     auto cheaper = [&](const ConfigResult& a, const ConfigResult& b) {
       if ((psnr(a) >= floor_db) != (psnr(b) >= floor_db)) return psnr(a) >= floor_db;
-      return a.seconds_per_frame < b.seconds_per_frame;
+      return a.cost_per_frame() < b.cost_per_frame();
     };
     std::tie(params, best) = search(params, cheaper);
     out.goal =
@@ -155,7 +155,7 @@ TuneResult run_tune(const TuneSettings& s,
   out.params = params;
   out.chosen = best;
   for (TuneStep& st : out.steps)
-    st.kept = st.psnr == psnr(best) && st.seconds_per_frame == best.seconds_per_frame;
+    st.kept = st.psnr == psnr(best) && st.seconds_per_frame == best.cost_per_frame();
   // The preset: every key (outputs back to the base's), and what it was tuned on.
   Params written = params;
   written.outputs = base.outputs;
@@ -174,7 +174,7 @@ TuneResult run_tune(const TuneSettings& s,
                          {"references", refs},
                          {"goal", out.goal},
                          {"layer", out.layer},
-                         {"seconds_per_frame", best.seconds_per_frame},
+                         {"seconds_per_frame", best.cost_per_frame()},
                          {"errors", errors},
                          {"configurations_measured", out.steps.size()},
                          {"keys", s.keys.empty() ? nlohmann::json("all") : nlohmann::json(s.keys)},

@@ -42,8 +42,9 @@ struct TuneSettings {
 };
 
 struct TuneStep {
-  std::string change;  // "slices=4", or "base"
-  double psnr = 0, seconds_per_frame = 0;
+  std::string change;                      // "slices=4", or "base"
+  double psnr = 0, seconds_per_frame = 0;  // ConfigResult::cost_per_frame (calibration renders'
+                                           // time included)
   bool kept = false;
 };
 
