@@ -32,6 +32,16 @@ ErrorStats with_mse(double mse) {
   return s;
 }
 
+// The path tracer's curve of the speedup tests: 1 s a frame at 20 dB, 2 s at 23 dB.
+void add_render_curve(BenchResult& r) {
+  for (auto [t, p] : {std::pair{2.0, 23.0}, std::pair{1.0, 20.0}}) {
+    RenderResult x;
+    x.seconds_per_frame = t;
+    x.error = with_mse(std::pow(10.0, -p / 10));
+    r.renders.push_back(x);
+  }
+}
+
 ConfigResult config(const std::string& name, double seconds, double psnr) {
   ConfigResult c;
   c.name = name;
@@ -151,12 +161,7 @@ TEST(BenchSpeedup, LogTimeInterpolatedOnTheRenderCurve) {
   BenchResult r;
   r.layers = {"composite"};
   r.configs = {config("mid", 0.1, 21.5), config("above", 0.1, 30), config("below", 0.1, 10)};
-  for (auto [t, p] : {std::pair{2.0, 23.0}, std::pair{1.0, 20.0}}) {
-    RenderResult x;
-    x.seconds_per_frame = t;
-    x.error = with_mse(std::pow(10.0, -p / 10));
-    r.renders.push_back(x);
-  }
+  add_render_curve(r);
   pipeline::equal_error_speedups(r);
   // Half way from 20 to 23 dB: sqrt(1 * 2) s, over 0.1 s.
   EXPECT_NEAR(r.configs[0].speedup, 10 * std::sqrt(2.0), 1e-9);
@@ -180,12 +185,7 @@ TEST(BenchSpeedup, TheCalibrationRendersTimeIsCounted) {
   EXPECT_TRUE(r.configs[0].pareto["composite"]);
   EXPECT_FALSE(r.configs[1].pareto["composite"]);
   EXPECT_TRUE(r.configs[2].pareto["composite"]);
-  for (auto [t, p] : {std::pair{2.0, 23.0}, std::pair{1.0, 20.0}}) {
-    RenderResult x;
-    x.seconds_per_frame = t;
-    x.error = with_mse(std::pow(10.0, -p / 10));
-    r.renders.push_back(x);
-  }
+  add_render_curve(r);
   pipeline::equal_error_speedups(r);
   EXPECT_NEAR(r.configs[2].speedup, 5 * std::sqrt(2.0), 1e-9);  // sqrt(2) s over 0.2 s
   r.configs[2].calibration_seconds = -1;  // a render without a time: not counted

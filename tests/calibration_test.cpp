@@ -289,7 +289,7 @@ TEST(Calibration, ARunTakesTheRendersMean) {
   // Through the temporal chain, calibrated on every frame (the sample carries DiffInd): the
   // solve feeds each frame its own indirect light once, standing in for the chain's feedback,
   // so that once the chain has a history its frames have their renders' means. (Solved
-  // without that feedback, frames 5-8 come out about 15 % too bright.)
+  // without that feedback, frames 5-8 come out 12-13 % too bright.)
   const test::RunResult chain =
       test::run_hbil("run " + test::q(kShot) + " -o " + test::q(dir / "chain/f_####.exr") + set +
                          " --set calibration=" + test::q(kShot),

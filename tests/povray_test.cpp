@@ -620,6 +620,15 @@ TEST(PovrayImport, ADepthBeyondAFloatIsBadData) {
     ASSERT_EQ(f.pixels[i * nc + cb], f.pixels[i * nc + cz]) << i;
 }
 
+// `hbil import-povray -q PASSES [OPTIONS] -o DIR/NAME/frame_####.exr`, which must succeed.
+void import_room(const TempDir& dir, const std::string& passes, const std::string& name,
+                 const std::string& options = "") {
+  const auto r = test::run_hbil(
+      "import-povray -q " + q(passes) + options + " -o " + q(dir / (name + "/frame_####.exr")),
+      dir.path());
+  ASSERT_EQ(r.code, 0) << r.err;
+}
+
 // `hbil compare ... --json` overall PSNR.
 double compare_psnr(const TempDir& dir, const std::string& test, const std::string& ref,
                     const std::string& layer, const std::string& ref_layer) {
@@ -637,14 +646,10 @@ double compare_psnr(const TempDir& dir, const std::string& test, const std::stri
 // (`--set unseen_radiance=0`). Bounds sit ~0.3 dB below the measured.
 TEST(AccuracyAgainstPovRay, RoomIndirectAndCompositeAgainstRadiosity) {
   TempDir dir(test::test_name());
-  auto r = test::run_hbil(
-      "import-povray -q " + q(kRoom + "/passes") + " -o " + q(dir / "room/frame_####.exr"),
-      dir.path());
-  ASSERT_EQ(r.code, 0) << r.err;
-  r = test::run_hbil("import-povray -q " + q(kRoom + "/passes") + " --reference-dir " +
-                         q(kRoom + "/bounce1") + " -o " + q(dir / "bounce1/frame_####.exr"),
-                     dir.path());
-  ASSERT_EQ(r.code, 0) << r.err;
+  ASSERT_NO_FATAL_FAILURE(import_room(dir, kRoom + "/passes", "room"));
+  ASSERT_NO_FATAL_FAILURE(
+      import_room(dir, kRoom + "/passes", "bounce1", " --reference-dir " + q(kRoom + "/bounce1")));
+  test::RunResult r;
   // {extra run options, bounds (indirect vs 1 bounce, vs 3 bounces, composite)}
   const std::pair<std::string, std::array<double, 3>> runs[] = {
       {"", {35.7, 28.35, 29.6}},                         // measured 36.01, 28.65, 29.90 dB
@@ -677,14 +682,9 @@ TEST(AccuracyAgainstPovRay, RoomIndirectAndCompositeAgainstRadiosity) {
 // several dB over the uncalibrated run.
 TEST(AccuracyAgainstPovRay, CalibratedOnASmallRadiosityRender) {
   TempDir dir(test::test_name());
-  auto r = test::run_hbil(
-      "import-povray -q " + q(kRoom + "/passes") + " -o " + q(dir / "room/frame_####.exr"),
-      dir.path());
-  ASSERT_EQ(r.code, 0) << r.err;
-  r = test::run_hbil(
-      "import-povray -q " + q(kRoom + "/calibration") + " -o " + q(dir / "cal/frame_####.exr"),
-      dir.path());
-  ASSERT_EQ(r.code, 0) << r.err;
+  ASSERT_NO_FATAL_FAILURE(import_room(dir, kRoom + "/passes", "room"));
+  ASSERT_NO_FATAL_FAILURE(import_room(dir, kRoom + "/calibration", "cal"));
+  test::RunResult r;
   const std::string room = dir / "room/frame_####.exr";
   const std::string preset = " --preset " + q(test::kSourceDir + "/presets/interior.json");
   // {extra run options, bound on the composite's PSNR against Combined (~0.3 dB below the

@@ -88,6 +88,19 @@ nlohmann::json stats_json(const ErrorStats& s) {
           {"energy", num_or_null(s.energy_ratio())}};
 }
 
+// The calibration renders' own time from their headers, over `frames` frames; -1 where one
+// has none.
+double calibration_render_seconds(const Calibration& c, size_t frames) {
+  double sum = 0;
+  for (const std::string& path : c.paths()) {
+    io::ImageFile f(path);
+    const double t = parse_render_time(cycles_attribute(f.spec(), ".render_time"));
+    if (t < 0) return -1;
+    sum += t + 0.005;  // truncated to 10 ms, as for --render
+  }
+  return frames ? sum / double(frames) : 0;
+}
+
 }  // namespace
 
 double parse_render_time(const std::string& t) {
@@ -108,23 +121,6 @@ double parse_render_time(const std::string& t) {
     start = colon + 1;
   }
 }
-
-namespace {
-
-// The calibration renders' own time from their headers, over `frames` frames; -1 where one
-// has none.
-double calibration_render_seconds(const Calibration& c, size_t frames) {
-  double sum = 0;
-  for (const std::string& path : c.paths()) {
-    io::ImageFile f(path);
-    const double t = parse_render_time(cycles_attribute(f.spec(), ".render_time"));
-    if (t < 0) return -1;
-    sum += t + 0.005;  // truncated to 10 ms, as for --render
-  }
-  return frames ? sum / double(frames) : 0;
-}
-
-}  // namespace
 
 BenchReference parse_bench_reference(const std::string& text) {
   const size_t eq = text.find('=');
