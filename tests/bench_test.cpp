@@ -12,6 +12,7 @@
 #include <sstream>
 
 #include "hbil/error.h"
+#include "pipeline/tune.h"
 #include "test_util.h"
 
 namespace hbil {
@@ -401,6 +402,28 @@ TEST(Tune, WritesAPresetNoWorseThanTheBase) {
   EXPECT_TRUE(contains(cal.out, "none was")) << cal.out;
   std::ifstream cf(dir / "c.json");
   EXPECT_GT(nlohmann::json::parse(cf)["tuned"]["seconds_per_frame"].get<double>(), 81.59);
+}
+
+// With a budget, a configuration whose one timed run lands within retime_band of it is timed
+// three more times (the median decides whether it fits); far from it, or with no band, once.
+TEST(Tune, RetimesOnlyNearTheBudget) {
+  pipeline::TuneSettings t;
+  const std::string in = test::kRoomPoles + "/frame_####.exr";
+  t.bench.shot = in;
+  t.bench.frames = "1";
+  t.bench.configs = {{"default", Params{}}};
+  t.bench.refs = {pipeline::parse_bench_reference("ao=" + in + ":AO")};
+  t.keys = {"slices"};
+  t.budget = 1000;  // seconds a frame: every configuration fits, far below it
+  auto runs = [&](double band) {
+    t.retime_band = band;
+    std::vector<int> r;
+    for (const pipeline::TuneStep& s : pipeline::run_tune(t).steps) r.push_back(s.runs);
+    return r;
+  };
+  EXPECT_EQ(runs(0.2), (std::vector<int>{1, 1, 1}));  // base, slices=1, slices=4
+  EXPECT_EQ(runs(0), (std::vector<int>{1, 1, 1}));
+  EXPECT_EQ(runs(2), (std::vector<int>{3, 3, 3}));  // every time within 2000 s of the budget
 }
 
 // --keys: only those keys are tried (every step changes one of them), the preset says so; a

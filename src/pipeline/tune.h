@@ -3,7 +3,9 @@
 // is set to each of its candidate values with the others held, and the best value is kept;
 // passes repeat until one changes nothing (at most `max_passes`). Each configuration is
 // measured as `hbil bench` measures it (the errors of every referenced layer, the time per
-// frame as `hbil run --no-display`), and measured once.
+// frame as `hbil run --no-display`), and measured once; with a budget, a configuration whose
+// one timed run lands within `retime_band` of the budget is timed three more times and its
+// median kept, so that one slow or fast run does not decide whether it fits.
 //
 // The objective is the PSNR of one layer. With a budget, the most accurate configuration
 // whose time per frame is within it; without one, the cheapest whose PSNR is within
@@ -38,6 +40,7 @@ struct TuneSettings {
   double budget = 0;    // seconds per frame; 0 = none
   double tolerance_db = 0.1;
   int max_passes = 3;
+  double retime_band = 0.2;       // fraction of the budget either side of it (0: never retime)
   std::vector<std::string> keys;  // the keys searched, of default_tune_axes ("": all)
 };
 
@@ -46,6 +49,7 @@ struct TuneStep {
   double psnr = 0, seconds_per_frame = 0;  // ConfigResult::cost_per_frame (calibration renders'
                                            // time included)
   bool kept = false;
+  int runs = 1;  // timed runs (3 where the first landed near the budget)
 };
 
 struct TuneResult {
