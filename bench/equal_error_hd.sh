@@ -16,6 +16,9 @@
 #       e.g. the 256x144 ladder's 1-spp frame 1), whose Cycles render time is printed, to be
 #       counted as hbil's over the frames
 #   PRESET=presets/interior.json   hbil's preset (default: none, the built-in defaults)
+#   OUTPUTS='["composite"]'   each hbil run is followed by one that computes and writes only
+#       these outputs (Cycles writes one image; a compositor taking hbil's composite in its
+#       place needs only that layer), and their median is printed too
 #
 # Each dir holds a 1920x1080 sequence of the scene rendered as samples/README.md says
 # (`--size 1920x1080 --samples 1`, back faces merged, sidecars), frames 1-4 or more (the
@@ -65,6 +68,11 @@ hbil_run() {  # hbil_run SCENE DIR
   rm -rf "$work/out"
   "$hbil" run "$2/frame_####.exr" -o "$work/out/frame_####.exr" --no-display "${preset[@]}" \
     "${pano[@]}" "${cal[@]}" 2>&1 | sed -n "s/.* \([0-9.]*\) s per frame.*/$1 hbil: \1 s per frame/p"
+  [ -n "${OUTPUTS:-}" ] || return 0
+  rm -rf "$work/out"
+  "$hbil" run "$2/frame_####.exr" -o "$work/out/frame_####.exr" --no-display "${preset[@]}" \
+    "${pano[@]}" "${cal[@]}" --set "outputs=$OUTPUTS" 2>&1 |
+    sed -n "s/.* \([0-9.]*\) s per frame.*/$1 hbil, outputs $OUTPUTS: \1 s per frame/p"
 }
 
 for s in ${SCENES:-room_poles courtyard}; do
@@ -107,8 +115,13 @@ print("'"$s"' panorama: %.4f s per frame (Cycles, mean of %d)" % (sum(t) / len(t
   } | tee "$work/$s.txt"
   python3 - "$work/$s.txt" "$s" <<'PY'
 import re, statistics, sys
-t = [float(x) for x in re.findall(r"hbil: ([0-9.]+) s per frame", open(sys.argv[1]).read())]
+text = open(sys.argv[1]).read()
+t = [float(x) for x in re.findall(r"hbil: ([0-9.]+) s per frame", text)]
 print("%s: hbil median %.3f s per frame over %d runs" % (sys.argv[2], statistics.median(t), len(t)))
+o = re.findall(r"hbil, (outputs .*): ([0-9.]+) s per frame", text)
+if o:
+    print("%s: hbil, %s, median %.3f s per frame over %d runs" % (
+        sys.argv[2], o[0][0], statistics.median(float(x) for _, x in o), len(o)))
 PY
 done
 echo "- load at end: $(uptime | sed 's/.*load average: //')"
