@@ -142,6 +142,52 @@ TEST(Calibration, TheSubsampleSeesEachBlocksCentrePixel) {
   EXPECT_EQ(c1.fx, cam.fx);
 }
 
+// An overscan's guard band is not the frame a calibration stands for: a render's mean is taken
+// over its display window. 4 x 2 data pixels from x = -1, a 2 x 2 display window at the origin:
+// DiffCol 0.5 x DiffInd 0.4 inside it (R + G + B: 0.6), DiffInd 100 in the band.
+TEST(Calibration, TheRendersMeanIsOverItsDisplayWindow) {
+  test::TempDir dir(test::test_name());
+  test::Pixels px;
+  px.spec = OIIO::ImageSpec(4, 2, 6, OIIO::TypeDesc::FLOAT);
+  px.spec.channelnames = {"ViewLayer.DiffCol.R", "ViewLayer.DiffCol.G", "ViewLayer.DiffCol.B",
+                          "ViewLayer.DiffInd.R", "ViewLayer.DiffInd.G", "ViewLayer.DiffInd.B"};
+  px.spec.x = -1;
+  px.spec.full_x = 0, px.spec.full_y = 0, px.spec.full_width = 2, px.spec.full_height = 2;
+  px.data.resize(4 * 2 * 6);
+  for (int y = 0; y < 2; ++y)
+    for (int x = 0; x < 4; ++x)
+      for (int c = 0; c < 6; ++c) px.at(x, y, c) = c < 3 ? 0.5f : (x == 1 || x == 2 ? 0.4f : 100.f);
+  const std::string path = dir / "cal.exr";
+  test::write_pixels(path, px);
+  EXPECT_NEAR(pipeline::reference_indirect_mean(path), 0.6, 1e-6);
+  // The same pixels with the display window the data window: the band counts.
+  px.spec.full_x = -1, px.spec.full_width = 4;
+  test::write_pixels(path, px);
+  EXPECT_NEAR(pipeline::reference_indirect_mean(path), (4 * 0.6 + 4 * 150.0) / 8, 1e-4);
+}
+
+// hbil's own mean, over the shot frame's display window: the subsample keeps the pixels whose
+// block centre lies inside it (10 x 6 data pixels, display window 5 x 4 at (3, 1)).
+TEST(Calibration, TheSubsampleKeepsTheDisplayWindow) {
+  GBuffer g;
+  g.width = 10, g.height = 6;
+  g.depth.assign(g.pixels(), 1.f);
+  g.display_x = 3, g.display_y = 1, g.display_width = 5, g.display_height = 4;
+  Camera cam;
+  cam.width = 10, cam.height = 6, cam.fx = cam.fy = 10, cam.cx = 5, cam.cy = 3;
+  const auto [s, c] = pipeline::subsample(g, cam, 2);  // centres at x 1, 3, 5, 7, 9; y 1, 3, 5
+  EXPECT_EQ(s.display_x, 1);
+  EXPECT_EQ(s.display_width, 3);  // x 3, 5, 7
+  EXPECT_EQ(s.display_y, 0);
+  EXPECT_EQ(s.display_height, 2);  // y 1, 3
+  for (int y = 0; y < s.height; ++y)
+    for (int x = 0; x < s.width; ++x)
+      EXPECT_EQ(s.in_display(x, y), g.in_display(2 * x + 1, 2 * y + 1)) << x << ", " << y;
+  const auto [whole, c1] = pipeline::subsample(g, cam, 1);
+  EXPECT_EQ(whole.display_x, 3);
+  EXPECT_EQ(whole.display_width, 5);
+}
+
 // With two bounces the fill lights the second bounce too: the secant is iterated until the
 // means agree within 0.1 %.
 TEST(Calibration, WithTwoBouncesTheSecantIsIterated) {

@@ -48,6 +48,14 @@ struct GBuffer {
   // Whether that field was read (packed or not).
   bool has(const std::string& field) const;
 
+  // The display window in this raster's pixels: where the frame is framed; the rest is guard
+  // band (an overscan). display_width 0: the whole raster.
+  int display_x = 0, display_y = 0, display_width = 0, display_height = 0;
+  bool in_display(int x, int y) const {
+    return display_width <= 0 || (x >= display_x && x < display_x + display_width &&
+                                  y >= display_y && y < display_y + display_height);
+  }
+
   size_t pixels() const { return size_t(width) * size_t(height); }
 };
 

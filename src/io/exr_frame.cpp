@@ -345,6 +345,13 @@ GBuffer read_fields(const InputFrame& f, const std::vector<std::string>& fields,
   GBuffer g;
   g.width = f.spec.width;
   g.height = f.spec.height;
+  if (f.spec.full_width != f.spec.width || f.spec.full_height != f.spec.height ||
+      f.spec.full_x != f.spec.x || f.spec.full_y != f.spec.y) {
+    g.display_x = f.spec.full_x - f.spec.x;
+    g.display_y = f.spec.full_y - f.spec.y;
+    g.display_width = f.spec.full_width;
+    g.display_height = f.spec.full_height;
+  }
   const size_t n = g.pixels();
   // Every field is read straight into its own array of the G-buffer, then checked in place.
   auto scalar = [&](const std::string& field) -> std::vector<float>& {

@@ -21,16 +21,21 @@ namespace hbil::pipeline {
 
 namespace {
 
-// The mean over v's pixels of DiffCol x the search's irradiance (hbil's `indirect`), R + G + B;
-// summed in row order, the same for any thread count.
+// The mean over g's display window of DiffCol x the search's irradiance (hbil's `indirect`),
+// R + G + B; background adds 0. Summed in row order, the same for any thread count.
 double indirect_mean(const ViewGBuffer& v, const GBuffer& g, const HorizonImage& h) {
   double sum = 0;
-  for (size_t i = 0; i < v.pixels(); ++i) {
-    if (v.is_background(i)) continue;
-    const Vec3 a = g.diffcol[i], e = h.irradiance[i];
-    sum += double(a.x) * e.x + double(a.y) * e.y + double(a.z) * e.z;
-  }
-  return v.pixels() ? sum / double(v.pixels()) : 0.0;
+  size_t n = 0;
+  for (int y = 0; y < g.height; ++y)
+    for (int x = 0; x < g.width; ++x) {
+      if (!g.in_display(x, y)) continue;
+      ++n;
+      const size_t i = size_t(y) * size_t(g.width) + size_t(x);
+      if (v.is_background(i)) continue;
+      const Vec3 a = g.diffcol[i], e = h.irradiance[i];
+      sum += double(a.x) * e.x + double(a.y) * e.y + double(a.z) * e.z;
+    }
+  return n ? sum / double(n) : 0.0;
 }
 
 // Frame c's point from its frame g (as the run reads it, colour packed or not) and camera.
@@ -152,6 +157,25 @@ std::pair<GBuffer, Camera> subsample(const GBuffer& g, const Camera& cam, int m)
             Vec3{half_to_float(bits[i]), half_to_float(bits[i + 1]), half_to_float(bits[i + 2])};
       }
   }
+  // The display window: the pixels of s whose source pixel lies in g's.
+  if (g.display_width > 0) {
+    auto span = [&](int lo, int len, int n, int full) {  // [first, last] of s in [lo, lo + len)
+      int a = n, b = -1;
+      for (int x = 0; x < n; ++x) {
+        const int sx = std::min(x * m + k, full - 1);
+        if (sx >= lo && sx < lo + len) a = std::min(a, x), b = std::max(b, x);
+      }
+      return std::pair{a, b};
+    };
+    const auto [x0, x1] = span(g.display_x, g.display_width, s.width, g.width);
+    const auto [y0, y1] = span(g.display_y, g.display_height, s.height, g.height);
+    s.display_x = x0;
+    s.display_y = y0;
+    s.display_width = std::max(0, x1 - x0 + 1);
+    s.display_height = std::max(0, y1 - y0 + 1);
+    if (s.display_width == 0 || s.display_height == 0)  // no sample inside: keep every pixel
+      s.display_width = s.display_height = 0;
+  }
   // Pixel x of s is pixel m x + k of g, whose centre is at raster m (x + 0.5) + k + 0.5 − m / 2.
   Camera c = cam;
   const double shift = k + 0.5 - 0.5 * m;
@@ -177,13 +201,22 @@ double reference_indirect_mean(const std::string& path) {
     for (const std::vector<int>* l : {&col, &ind})
       lo = std::min(lo, channel(*l, k)), hi = std::max(hi, channel(*l, k) + 1);
   const std::vector<float> px = im.read_range(lo, hi);
-  const size_t stride = size_t(hi - lo), pixels = size_t(im.width()) * size_t(im.height());
+  // Over the display window's pixels (an overscan's guard band is not the frame it calibrates),
+  // those the data window lacks counting 0.
+  const OIIO::ImageSpec& sp = im.spec();
+  const size_t stride = size_t(hi - lo);
+  const size_t pixels = size_t(sp.full_width) * size_t(sp.full_height);
   double sum = 0;
-  for (size_t i = 0; i < pixels; ++i)
-    for (size_t k = 0; k < nc; ++k) {
-      const float x = px[i * stride + size_t(channel(col, k) - lo)] *
-                      px[i * stride + size_t(channel(ind, k) - lo)];
-      if (std::isfinite(x)) sum += x;
+  for (int y = std::max(sp.y, sp.full_y);
+       y < std::min(sp.y + sp.height, sp.full_y + sp.full_height); ++y)
+    for (int x = std::max(sp.x, sp.full_x);
+         x < std::min(sp.x + sp.width, sp.full_x + sp.full_width); ++x) {
+      const size_t i = size_t(y - sp.y) * size_t(sp.width) + size_t(x - sp.x);
+      for (size_t k = 0; k < nc; ++k) {
+        const float v = px[i * stride + size_t(channel(col, k) - lo)] *
+                        px[i * stride + size_t(channel(ind, k) - lo)];
+        if (std::isfinite(v)) sum += v;
+      }
     }
   return pixels > 0 ? sum / double(pixels) : 0.0;
 }

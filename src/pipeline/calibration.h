@@ -6,8 +6,9 @@
 // a fraction of the shot's resolution: the mean over its pixels of DiffCol x DiffInd (every
 // channel summed). At each calibration frame c, hbil computes frame c alone (no history, as
 // with temporal false) with the fill off and on, and the factor s_c is the one whose
-// indirect light has the render's mean, over each image's own pixels (background adds 0 to
-// both). hbil computes on the pixel at the centre of every 2n x 2n block where the run
+// indirect light has the render's mean, over each image's display window (background adds 0
+// to both; an overscan's guard band lights the frame but is not the frame a render of it
+// stands for). hbil computes on the pixel at the centre of every 2n x 2n block where the run
 // searches one pixel in n x n (subsample below): a mean needs fewer pixels than an image.
 //
 //   s_c = (mean_ref − mean_hbil(s = 0)) / (mean_hbil(s = 1) − mean_hbil(s = 0))
@@ -95,8 +96,8 @@ class Calibration {
 // sees them: what the calibration computes on. m <= 1: g itself, unpacked.
 std::pair<GBuffer, Camera> subsample(const GBuffer& g, const Camera& cam, int m);
 
-// The mean over an image's pixels of DiffCol x DiffInd, R + G + B (non-finite values count as
-// 0). Throws Error(Exit::missing_pass) naming the file for a missing pass.
+// The mean over an image's display window of DiffCol x DiffInd, R + G + B (non-finite values,
+// and display pixels the data window lacks, count as 0). Throws Error(Exit::missing_pass) naming the file for a missing pass.
 double reference_indirect_mean(const std::string& path);
 
 }  // namespace hbil::pipeline
