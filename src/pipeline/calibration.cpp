@@ -201,17 +201,18 @@ double reference_indirect_mean(const std::string& path) {
     for (const std::vector<int>* l : {&col, &ind})
       lo = std::min(lo, channel(*l, k)), hi = std::max(hi, channel(*l, k) + 1);
   const std::vector<float> px = im.read_range(lo, hi);
-  // Over the display window's pixels (an overscan's guard band is not the frame it calibrates),
-  // those the data window lacks counting 0.
+  // Over the pixels of the data window inside the display window (an overscan's guard band is
+  // not the frame it calibrates), as hbil's own mean is taken.
   const OIIO::ImageSpec& sp = im.spec();
   const size_t stride = size_t(hi - lo);
-  const size_t pixels = size_t(sp.full_width) * size_t(sp.full_height);
+  size_t pixels = 0;
   double sum = 0;
   for (int y = std::max(sp.y, sp.full_y);
        y < std::min(sp.y + sp.height, sp.full_y + sp.full_height); ++y)
     for (int x = std::max(sp.x, sp.full_x);
          x < std::min(sp.x + sp.width, sp.full_x + sp.full_width); ++x) {
       const size_t i = size_t(y - sp.y) * size_t(sp.width) + size_t(x - sp.x);
+      ++pixels;
       for (size_t k = 0; k < nc; ++k) {
         const float v = px[i * stride + size_t(channel(col, k) - lo)] *
                         px[i * stride + size_t(channel(ind, k) - lo)];

@@ -96,8 +96,9 @@ class Calibration {
 // sees them: what the calibration computes on. m <= 1: g itself, unpacked.
 std::pair<GBuffer, Camera> subsample(const GBuffer& g, const Camera& cam, int m);
 
-// The mean over an image's display window of DiffCol x DiffInd, R + G + B (non-finite values,
-// and display pixels the data window lacks, count as 0). Throws Error(Exit::missing_pass) naming the file for a missing pass.
+// The mean over an image's display window (the pixels of its data window inside it) of
+// DiffCol x DiffInd, R + G + B (non-finite values count as 0). Throws
+// Error(Exit::missing_pass) naming the file for a missing pass.
 double reference_indirect_mean(const std::string& path);
 
 }  // namespace hbil::pipeline
