@@ -29,8 +29,7 @@ void info(const std::string& path, const ParamOptions& po) {
             << "resolution: " << f.spec.width << "x" << f.spec.height << ", " << f.spec.nchannels
             << " channels, "
             << "compression " << f.spec.get_string_attribute("compression", "?") << "\n";
-  if (f.spec.x != f.spec.full_x || f.spec.y != f.spec.full_y || f.spec.width != f.spec.full_width ||
-      f.spec.height != f.spec.full_height)
+  if (io::windowed(f.spec))
     std::cout << "windows: data " << f.spec.width << "x" << f.spec.height << " at (" << f.spec.x
               << ", " << f.spec.y << "), display " << f.spec.full_width << "x" << f.spec.full_height
               << " at (" << f.spec.full_x << ", " << f.spec.full_y

@@ -340,13 +340,17 @@ constexpr float kMaxColour = 1e9f, kMaxAlbedo = 1e3f, kMaxMotion = 1e6f;
 
 }  // namespace
 
+bool windowed(const OIIO::ImageSpec& spec) {
+  return spec.full_width != spec.width || spec.full_height != spec.height ||
+         spec.full_x != spec.x || spec.full_y != spec.y;
+}
+
 GBuffer read_fields(const InputFrame& f, const std::vector<std::string>& fields, const Params& p,
                     bool keep_half) {
   GBuffer g;
   g.width = f.spec.width;
   g.height = f.spec.height;
-  if (f.spec.full_width != f.spec.width || f.spec.full_height != f.spec.height ||
-      f.spec.full_x != f.spec.x || f.spec.full_y != f.spec.y) {
+  if (windowed(f.spec)) {
     g.display_x = f.spec.full_x - f.spec.x;
     g.display_y = f.spec.full_y - f.spec.y;
     g.display_width = f.spec.full_width;
@@ -445,10 +449,7 @@ Camera find_camera(const InputFrame& f, GBuffer& g, const Params& p, double max_
     // A sidecar describes the frame as framed: the display window. The pixels are the data
     // window's (a crop, or an overscan's guard band), whose raster starts full - data
     // origin further on.
-    const bool windowed = f.spec.full_width != f.spec.width ||
-                          f.spec.full_height != f.spec.height || f.spec.full_x != f.spec.x ||
-                          f.spec.full_y != f.spec.y;
-    if (windowed) {
+    if (windowed(f.spec)) {
       if (cam.width != f.spec.full_width || cam.height != f.spec.full_height) {
         std::ostringstream s;
         s << f.where() << ": camera " << cam.source << " is for " << cam.width << "x" << cam.height

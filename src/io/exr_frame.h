@@ -40,6 +40,10 @@ struct InputFrame {
   std::string where() const;
 };
 
+// Whether an image's data window differs from its display window (a crop, or an overscan's
+// guard band).
+bool windowed(const OIIO::ImageSpec& spec);
+
 // Opens the header and resolves the channels. Throws Error(Exit::input) when the file is
 // missing or not a readable image.
 InputFrame open_frame(const std::string& path, int frame, const Params& p);

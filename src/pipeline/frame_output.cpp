@@ -11,6 +11,7 @@
 #include <future>
 
 #include "hbil/error.h"
+#include "io/exr_frame.h"
 
 namespace hbil::pipeline {
 
@@ -56,10 +57,8 @@ const std::vector<float>& display_pixels(const AoFrame& f, const std::string& la
 const std::vector<float>& display_window(const std::vector<float>& px, int channels, int& width,
                                          int& height, const OIIO::ImageSpec& spec,
                                          std::vector<float>& scratch) {
-  if (spec.width != width || spec.height != height ||
-      (spec.x == spec.full_x && spec.y == spec.full_y && spec.width == spec.full_width &&
-       spec.height == spec.full_height) ||
-      spec.full_width <= 0 || spec.full_height <= 0)
+  if (spec.width != width || spec.height != height || !io::windowed(spec) || spec.full_width <= 0 ||
+      spec.full_height <= 0)
     return px;
   const int w = spec.full_width, h = spec.full_height;
   std::vector<float> out(size_t(w) * size_t(h) * size_t(channels), 0.f);
