@@ -16,6 +16,7 @@
 #include <iterator>
 #include <limits>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "hbil/ao_frame.h"
@@ -420,6 +421,34 @@ TEST_F(ExrFrame, ReadsOnlyTheNeededFields) {
   no_alpha.passes.erase("alpha");
   const InputFrame f2 = open_frame(path, 1, no_alpha);
   EXPECT_EQ(fields_needed(f2, no_alpha), (std::vector<std::string>{"depth", "normal"}));
+}
+
+// Emit is light for the gather only where the frame's direct light lacks the emitters'
+// (Params::emission): "auto" takes it from the header, gathered for a frame hbil
+// import-povray wrote, direct (not gathered) for any other, as for Cycles' renders.
+TEST_F(ExrFrame, EmissionIsGatheredForPovRayImportsUnlessThePresetSays) {
+  const std::vector<std::string> channels = blender_channels("ViewLayer");
+  test::Pixels px;
+  px.spec = OIIO::ImageSpec(kW, kH, int(channels.size()), OIIO::TypeDesc::FLOAT);
+  px.spec.channelnames = channels;
+  px.data.resize(size_t(kW) * kH * channels.size());
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x)
+      for (int c = 0; c < int(channels.size()); ++c) px.at(x, y, c) = value_for(channels[c], x, y);
+  ASSERT_NO_FATAL_FAILURE(test::write_pixels(file("render.exr"), px));
+  px.spec.attribute("hbil:source", "POV-Ray passes in shot/passes (hbil import-povray)");
+  ASSERT_NO_FATAL_FAILURE(test::write_pixels(file("import.exr"), px));
+  // {emission, gathered for the render, for the import}
+  const std::tuple<std::string, bool, bool> cases[] = {
+      {"auto", false, true}, {"direct", false, false}, {"gathered", true, true}};
+  for (const auto& [emission, render, import] : cases) {
+    SCOPED_TRACE(emission);
+    Params p;
+    p.emission = emission;
+    EXPECT_EQ(emission_gathered(open_frame(file("render.exr"), 1, p), p), render);
+    const GBuffer g = read_fields(open_frame(file("import.exr"), 1, p), {"depth"}, p);
+    EXPECT_EQ(g.emit_gathered, import);
+  }
 }
 
 TEST_F(ExrFrame, SidecarOfAnotherResolutionIsCameraError) {

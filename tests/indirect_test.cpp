@@ -152,6 +152,40 @@ TEST(UnseenRadiance, AutoIsAFractionOfTheFramesDirectOutgoingRadiance) {
   check_unseen_radiance("bitmask", true);
 }
 
+// Face B glows, Emit = L, with no direct light. Where the render's DiffDir already holds the
+// light emitters cast (Cycles; emit_gathered false) the gather adds none of it on face A; where
+// it does not (a POV-Ray import; true) face A receives it as from any surface of radiance L:
+// E/π = L (1 − AO), as in check_uniform_radiance. The composite adds Emit either way.
+TEST(NearFieldIrradiance, EmitIsGatheredOnlyWhereTheDirectLightLacksIt) {
+  const Vec3 L{0.5f, 1.f, 2.f};
+  Groove s = lit_groove(90, Vec3{});
+  s.g.emit.assign(s.g.pixels(), Vec3{});
+  size_t glowing = s.g.pixels();
+  for (size_t i = 0; i < s.g.pixels(); ++i)
+    if (s.g.depth[i] < 1e9f && s.g.normal[i].z < 0.99f) s.g.emit[i] = L, glowing = i;
+  ASSERT_LT(glowing, s.g.pixels());
+  Params p = gather_params("bitmask");
+  p.outputs.push_back("composite");
+  for (const bool gathered : {false, true}) {
+    SCOPED_TRACE(gathered ? "gathered" : "direct");
+    s.g.emit_gathered = gathered;
+    const AoFrame f = compute_ao_frame(s.g, s.cam, p);
+    const int checked = for_each_face_a_point(s, [&](size_t i, double occluded, double d) {
+      if (gathered) {
+        EXPECT_NEAR(f.irradiance[i].x / L.x, occluded, 0.04) << d;
+        EXPECT_NEAR(f.irradiance[i].z / L.z, occluded, 0.04) << d;
+        EXPECT_GT(occluded, 0.05) << d;
+      } else {
+        EXPECT_EQ(f.irradiance[i].x, 0.f) << d;
+        EXPECT_EQ(f.irradiance[i].z, 0.f) << d;
+      }
+    });
+    EXPECT_GT(checked, 50);
+    // composite = DiffCol x (DiffDir + E/π) + Emit, DiffCol 1 and DiffDir 0 on face B.
+    EXPECT_NEAR(f.composite[glowing].y, f.indirect[glowing].y + L.y, 1e-5f);
+  }
+}
+
 TEST(NearFieldIrradiance, BackFacingNeighbourOccludesButSendsNoLight) {
   Groove s = lit_groove(90, {1, 1, 1});
   const Params p = gather_params("horizon");

@@ -195,6 +195,16 @@ TEST(Params, WrongTypeNamesKeyAndValue) {
       Exit::preset, {"'passes.normal'"});
   expect_error(
       [] {
+        params_from_json(json{{"emission", 1}}, "t.json");
+      },
+      Exit::preset, {"'emission'", "\"direct\"", "1"});
+  expect_error(
+      [] {
+        params_from_json(json{{"emission", "both"}}, "t.json");
+      },
+      Exit::preset, {"'emission'", "\"both\"", "\"gathered\""});
+  expect_error(
+      [] {
         params_from_json(json{{"outputs", "ao"}}, "t.json");
       },
       Exit::preset, {"'outputs'", "array"});

@@ -20,7 +20,7 @@ std::vector<Vec3> source_radiance(const GBuffer& g, const std::vector<Vec3>& irr
   for (size_t i = 0; i < g.pixels(); ++i) {
     const Vec3 e = irradiance.empty() ? g.diffdir[i] : g.diffdir[i] + irradiance[i];
     L[i] = Vec3{g.diffcol[i].x * e.x, g.diffcol[i].y * e.y, g.diffcol[i].z * e.z};
-    if (!g.emit.empty()) L[i] += g.emit[i];
+    if (g.emit_gathered && !g.emit.empty()) L[i] += g.emit[i];
   }
   return L;
 }
@@ -117,10 +117,10 @@ HorizonImage search_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& 
     return f > 1 ? upsample_horizon(v, lo, f, h, tol) : h;
   };
   // Bounce k gathers the outgoing radiance of bounce k − 1 (bounce 0: direct light and
-  // emission, plus the previous frame's indirect light when the temporal chain feeds it
-  // back). Occlusion is the same every time; the last search's is kept.
-  // Each buffer is released at its last use: the feedback and the previous bounce once the
-  // source radiance is made, the source radiance once the march has what it reads.
+  // Emit where the gather takes it, plus the previous frame's indirect light when the temporal
+  // chain feeds it back). Occlusion is the same every time; the last search's is kept. Each buffer
+  // is released at its last use: the feedback and the previous bounce once the source radiance is
+  // made, the source radiance once the march has what it reads.
   HorizonImage h;
   // unseen_radiance "auto": a fraction of the frame's mean direct outgoing radiance, times
   // what does not escape over each pixel's hemisphere (unseen.h), the same for every bounce.

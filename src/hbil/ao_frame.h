@@ -30,8 +30,8 @@ struct AoFrame {
 };
 
 // The diffusely reflected radiance a pixel sends to its neighbours (HBIL eq. 16-17):
-// DiffCol × (DiffDir + irradiance) + Emit, with irradiance = E/π of the previous bounce
-// (empty: none yet).
+// DiffCol × (DiffDir + irradiance), + Emit where g.emit_gathered (Params::emission), with
+// irradiance = E/π of the previous bounce (empty: none yet).
 std::vector<Vec3> source_radiance(const GBuffer& g, const std::vector<Vec3>& irradiance);
 
 // The receiver's weight on diffusely reflected light, HBIL eq. 19: 1 − F0 per channel from

@@ -24,8 +24,11 @@ struct GBuffer {
   std::vector<Vec3> diffcol;     // diffuse albedo (Blender DiffCol)
   std::vector<Vec3> diffdir;     // direct diffuse irradiance / π (Blender DiffDir)
   std::vector<Vec3> emit;        // emitted radiance (Blender Emit)
-  std::vector<Vec3> f0;          // reflectance at normal incidence (optional, HBIL eq. 19)
-  std::vector<float> metallic;   // metalness in [0, 1] (optional, used when f0 is absent)
+  // Whether emit is light the gather adds (Params::emission): false where diffdir already
+  // holds what the emitting surfaces cast (Cycles), so that emit is only the composite's.
+  bool emit_gathered = false;
+  std::vector<Vec3> f0;         // reflectance at normal incidence (optional, HBIL eq. 19)
+  std::vector<float> metallic;  // metalness in [0, 1] (optional, used when f0 is absent)
   // Raster offset (du, dv) per pixel from its centre to where its surface was in the
   // previous frame (from Blender's Vector pass), 2 floats per pixel.
   std::vector<float> motion;

@@ -208,6 +208,7 @@ json to_json(const Params& p) {
   if (p.unseen_radiance_auto) j["unseen_radiance"] = "auto";
   j["method"] = p.method;
   j["reprojection"] = p.reprojection;
+  j["emission"] = p.emission;
   j["environment"] = p.environment;
   j["panorama"] = p.panorama;
   j["calibration"] = p.calibration;
@@ -287,6 +288,10 @@ Params params_from_json(const json& j, const std::string& where, Params p) {
         fail(where,
              "key 'reprojection' must be \"auto\", \"scatter\" or \"vector\", got " + v.dump());
       p.reprojection = v.get<std::string>();
+    } else if (key == "emission") {
+      if (!v.is_string())
+        fail(where, "key 'emission' must be \"auto\", \"direct\" or \"gathered\", got " + v.dump());
+      p.emission = v.get<std::string>();
     } else if (key == "environment") {
       if (!v.is_string())
         fail(where, "key 'environment' must be a file name or \"rgb:r,g,b\", got " + v.dump());
@@ -341,8 +346,8 @@ Params params_from_json(const json& j, const std::string& where, Params p) {
       std::vector<std::string> keys;
       for (const auto& i : params_table()) keys.push_back(i.key);
       keys.insert(keys.end(),
-                  {"method", "reprojection", "environment", "panorama", "calibration", "view_layer",
-                   "input_space", "passes", "outputs", "compression", "tuned"});
+                  {"method", "reprojection", "emission", "environment", "panorama", "calibration",
+                   "view_layer", "input_space", "passes", "outputs", "compression", "tuned"});
       fail(where, "unknown key '" + key + "' (known: " + allowed_list(keys) + ")");
     }
   }
@@ -374,6 +379,9 @@ void validate(const Params& p, const std::string& where) {
   if (p.reprojection != "auto" && p.reprojection != "scatter" && p.reprojection != "vector")
     fail(where, "key 'reprojection' = \"" + p.reprojection +
                     "\" is not one of \"auto\", \"scatter\", \"vector\"");
+  if (p.emission != "auto" && p.emission != "direct" && p.emission != "gathered")
+    fail(where, "key 'emission' = \"" + p.emission +
+                    "\" is not one of \"auto\", \"direct\", \"gathered\"");
   if (p.outputs.empty()) fail(where, "key 'outputs' is empty: nothing to compute");
   const auto& comp = output_compressions();
   if (std::find(comp.begin(), comp.end(), p.compression) == comp.end())

@@ -74,6 +74,11 @@ struct Params {
   // DiffCol, DiffDir, Emit, Depth), whose off-screen part lights the gather's empty
   // directions (radiance_cache.h); "" (off).
   std::string panorama;
+  // Whether the gather takes the Emit pass as light: "direct" (the renderer's DiffDir already
+  // holds the light emitting surfaces cast, as Cycles' does), "gathered" (it does not: a
+  // POV-Ray import, whose emitters light the scene through radiosity only), "auto" (gathered
+  // for a frame `hbil import-povray` wrote, else direct). Emit enters the composite either way.
+  std::string emission = "auto";
   bool ao_multibounce = false;  // ao as RGB with the multi-bounce fit (improved-AO eq. 12)
 
   // --- Temporal chain (HBIL §2.3.1 eq. 17, §3.2, §3.3): across the frames of one run ---

@@ -32,11 +32,11 @@ bool in_frustum(const Camera& cam, const Vec3d& d) {
 }
 
 // g's outgoing diffuse radiance at pixel i with irradiance / π `e` there:
-// DiffCol x e + Emit.
+// DiffCol x e, + Emit where the gather takes it as light (GBuffer::emit_gathered).
 Vec3 outgoing(const GBuffer& g, size_t i, const Vec3& e) {
   const Vec3& a = g.diffcol[i];
   Vec3 l{a.x * e.x, a.y * e.y, a.z * e.z};
-  if (!g.emit.empty()) l += g.emit[i];
+  if (g.emit_gathered && !g.emit.empty()) l += g.emit[i];
   return l;
 }
 

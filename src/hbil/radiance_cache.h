@@ -10,8 +10,8 @@
 // What it holds (RadianceCache::add, once a frame's outputs are known): on a regular grid of
 // the frame's pixels (1 in s x s, s = ceil(width / kColumns), so about kColumns x
 // kColumns·height/width entries a frame at any resolution), each geometry pixel's world
-// position and outgoing diffuse radiance DiffCol x (DiffDir + E/π) + Emit (with E the
-// frame's indirect irradiance as output, the temporal chain's accumulated one), and each
+// position and outgoing diffuse radiance DiffCol x (DiffDir + E/π) (+ Emit if emit_gathered) (with
+// E the frame's indirect irradiance as output, the temporal chain's accumulated one), and each
 // background pixel's world direction (a known empty direction: the sky's light is already
 // in DiffDir). Entries older than `frames` frame numbers are dropped, so a frame's fill
 // depends on at most the `frames` frames before it, and a farm chunk with that much pre-roll
@@ -40,7 +40,7 @@
 //
 // A panoramic G-buffer of the frame (Params::panorama: Cycles' equirectangular camera at the
 // frame's camera position, direct light only) feeds the same probe (set_panorama): its
-// geometry pixels with their world position and DiffCol x (DiffDir + A) + Emit, A its
+// geometry pixels with their world position and DiffCol x (DiffDir + A) (+ Emit, as above), A its
 // panorama_ambient, for that frame alone. Unlike the frames' entries, its entries and texels
 // inside the frustum count too: it knows what lies beyond gather_radius there. Its
 // background is left unknown, so it takes the fallback (unseen_radiance; with "auto" the fill
@@ -79,7 +79,7 @@ class RadianceCache {
   explicit RadianceCache(int frames) : frames_(frames) {}
 
   // Frame `frame`'s view-space G-buffer `v` with camera `cam`: its pixels' outgoing radiance
-  // g.DiffCol x (g.DiffDir + E[i]) + g.Emit, with E the frame's irradiance / π (size
+  // g.DiffCol x (g.DiffDir + E[i]) (+ g.Emit, as above), with E the frame's irradiance / π (size
   // v.pixels()). Frames are added in increasing order; entries that no later frame can read
   // are dropped.
   void add(const ViewGBuffer& v, const Camera& cam, const GBuffer& g, const std::vector<Vec3>& E,

@@ -3,10 +3,10 @@
 //   frame N: view-space G-buffer -> cut detection -> reprojection of frame N−1's history
 //   (reproject.h: scatter with both cameras, or gather through the Vector pass) -> push/pull
 //   fill of its disocclusions (pushpull.h) -> horizon search with the slices turned by the
-//   frame number and, as source radiance, DiffCol × (DiffDir + reprojected indirect) + Emit
-//   (HBIL §2.3.1 eq. 17: one more bounce every frame) -> accumulation of irradiance, ao and
-//   the bent vector with the reprojected history -> outputs; the accumulated result is the
-//   history of frame N+1.
+//   frame number and, as source radiance, DiffCol × (DiffDir + reprojected indirect) (+ Emit, see
+//   source_radiance) (HBIL §2.3.1 eq. 17: one more bounce every frame) -> accumulation of
+//   irradiance, ao and the bent vector with the reprojected history -> outputs; the accumulated
+//   result is the history of frame N+1.
 //
 // Only one frame of history is resident, whatever the length of the sequence.
 //

@@ -207,7 +207,8 @@ std::vector<std::string> fields_needed(const InputFrame& f, const Params& reques
     need.push_back("diffcol");
   }
   if (p.wants("irradiance") || p.wants("indirect") || p.wants("composite")) {
-    // Source radiance DiffCol × DiffDir + Emit (HBIL eq. 16-17); Emit is optional.
+    // Source radiance DiffCol × DiffDir (+ Emit where the emitters' light is not in DiffDir;
+    // HBIL eq. 16-17); Emit is optional, and the composite and unseen_radiance "auto" read it.
     require_fields(f, {"diffcol", "diffdir"}, "irradiance, indirect and composite");
     need.insert(need.end(), {"diffcol", "diffdir"});
     if (f.has("emit")) need.push_back("emit");
@@ -340,6 +341,14 @@ constexpr float kMaxColour = 1e9f, kMaxAlbedo = 1e3f, kMaxMotion = 1e6f;
 
 }  // namespace
 
+bool emission_gathered(const InputFrame& f, const Params& p) {
+  if (p.emission != "auto") return p.emission == "gathered";
+  // hbil import-povray's frames: POV-Ray's emitters light other surfaces only through
+  // radiosity, which the import puts in DiffInd, not DiffDir.
+  return f.spec.get_string_attribute("hbil:source").find("(hbil import-povray)") !=
+         std::string::npos;
+}
+
 bool windowed(const OIIO::ImageSpec& spec) {
   return spec.full_width != spec.width || spec.full_height != spec.height ||
          spec.full_x != spec.x || spec.full_y != spec.y;
@@ -356,6 +365,7 @@ GBuffer read_fields(const InputFrame& f, const std::vector<std::string>& fields,
     g.display_width = f.spec.full_width;
     g.display_height = f.spec.full_height;
   }
+  g.emit_gathered = emission_gathered(f, p);
   const size_t n = g.pixels();
   // Every field is read straight into its own array of the G-buffer, then checked in place.
   auto scalar = [&](const std::string& field) -> std::vector<float>& {

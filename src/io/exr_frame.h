@@ -44,6 +44,10 @@ struct InputFrame {
 // guard band).
 bool windowed(const OIIO::ImageSpec& spec);
 
+// Whether the frame's Emit pass is light for the gather to add (Params::emission; "auto": for
+// frames `hbil import-povray` wrote), that is whether its DiffDir lacks the emitters' light.
+bool emission_gathered(const InputFrame& f, const Params& p);
+
 // Opens the header and resolves the channels. Throws Error(Exit::input) when the file is
 // missing or not a readable image.
 InputFrame open_frame(const std::string& path, int frame, const Params& p);

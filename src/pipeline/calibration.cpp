@@ -144,6 +144,7 @@ std::pair<GBuffer, Camera> subsample(const GBuffer& g, const Camera& cam, int m)
   pick(g.diffcol, s.diffcol);
   pick(g.diffdir, s.diffdir);
   pick(g.emit, s.emit);
+  s.emit_gathered = g.emit_gathered;
   pick(g.f0, s.f0);
   pick(g.metallic, s.metallic);
   for (const auto& [name, bits] : g.packed) {
