@@ -1053,6 +1053,9 @@ TEST_F(Cli, InfoListsPassesCameraAndOutputs) {
   // over the geometry, here against the same mean taken from the frame's own pixels; by
   // default the elevations the frame does not show escape, with the interior preset not.
   EXPECT_TRUE(contains(r.out, "unseen_radiance: auto = ")) << r.out;
+  // A Cycles render's emitters light others in its DiffDir: Emit is not gathered again.
+  EXPECT_TRUE(contains(r.out, "emission: direct (DiffDir already holds")) << r.out;
+  EXPECT_TRUE(contains(r.out, "from the header (emission auto)")) << r.out;
   EXPECT_TRUE(contains(r.out, "elevations the frame does not show escape)")) << r.out;
   const RunResult interior = hbil("info " + q(sample(1)) + " --preset " +
                                   q(std::string(HBIL_SOURCE_DIR) + "/presets/interior.json"));

@@ -93,6 +93,13 @@ void info(const std::string& path, const ParamOptions& po) {
   }
 
   std::cout << "search: " << describe_search(p, f.spec.width, f.spec.height) << "\n";
+  if (f.has("emit"))
+    std::cout << "emission: "
+              << (io::emission_gathered(f, p)
+                      ? "gathered (Emit lights other surfaces through the gather)"
+                      : "direct (DiffDir already holds the light of emitting surfaces; Emit "
+                        "enters the composite only)")
+              << (p.emission == "auto" ? ", from the header (emission auto)" : "") << "\n";
   if (p.gather_radius_auto || p.thickness_auto || p.gather_thickness_auto) {
     std::cout << "auto: ";
     try {
