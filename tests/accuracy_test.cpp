@@ -124,18 +124,24 @@ TEST(AccuracyAgainstCycles, CourtyardIndirectOneBounce) {
   const ErrorStats e = indirect_error("courtyard", indirect_params());
   EXPECT_GT(e.count, 600000u);
   std::cout << "courtyard: indirect " << e.psnr() << " dB\n";
-  EXPECT_GT(e.psnr(), 33.05) << "rmse " << e.rmse() << " mean "
-                             << e.mean_error();                               // measured 33.36 dB
-  EXPECT_GT(indirect_error("courtyard", gather_only_params()).psnr(), 28.2);  // measured 28.52
+  EXPECT_GT(e.psnr(), 33.0) << "rmse " << e.rmse() << " mean "
+                            << e.mean_error();  // measured 33.31 dB
+  const double gather = indirect_error("courtyard", gather_only_params()).psnr();
+  std::cout << "courtyard: indirect, gather only " << gather << " dB\n";
+  EXPECT_GT(gather, 28.2);  // measured 28.48
 }
 
 TEST(AccuracyAgainstCycles, RoomWithPolesIndirectOneBounce) {
   const ErrorStats e = indirect_error("room_poles", indirect_params());
   EXPECT_GT(e.count, 600000u);
   std::cout << "room_poles: indirect " << e.psnr() << " dB\n";
-  EXPECT_GT(e.psnr(), 30.35) << "rmse " << e.rmse() << " mean "
-                             << e.mean_error();                                // measured 30.67 dB
-  EXPECT_GT(indirect_error("room_poles", gather_only_params()).psnr(), 28.6);  // measured 28.92
+  // The glowing cube's light is in its neighbours' DiffDir: gathering its Emit as well
+  // (emission "gathered") gives 30.67 dB here and 28.92 for the gather alone.
+  EXPECT_GT(e.psnr(), 33.05) << "rmse " << e.rmse() << " mean "
+                             << e.mean_error();  // measured 33.36 dB
+  const double gather = indirect_error("room_poles", gather_only_params()).psnr();
+  std::cout << "room_poles: indirect, gather only " << gather << " dB\n";
+  EXPECT_GT(gather, 29.1);  // measured 29.41
 }
 
 // The samples carry a BackFaces.Depth.Z layer (samples/blender/backfaces.py). Measured
