@@ -124,8 +124,8 @@ TEST(AccuracyAgainstCycles, CourtyardIndirectOneBounce) {
   const ErrorStats e = indirect_error("courtyard", indirect_params());
   EXPECT_GT(e.count, 600000u);
   std::cout << "courtyard: indirect " << e.psnr() << " dB\n";
-  EXPECT_GT(e.psnr(), 33.0) << "rmse " << e.rmse() << " mean "
-                            << e.mean_error();  // measured 33.31 dB
+  EXPECT_GT(e.psnr(), 34.75) << "rmse " << e.rmse() << " mean "
+                             << e.mean_error();  // measured 35.09 dB (33.31 with the fill at 0.8)
   const double gather = indirect_error("courtyard", gather_only_params()).psnr();
   std::cout << "courtyard: indirect, gather only " << gather << " dB\n";
   EXPECT_GT(gather, 28.2);  // measured 28.48
@@ -136,9 +136,12 @@ TEST(AccuracyAgainstCycles, RoomWithPolesIndirectOneBounce) {
   EXPECT_GT(e.count, 600000u);
   std::cout << "room_poles: indirect " << e.psnr() << " dB\n";
   // The glowing cube's light is in its neighbours' DiffDir: gathering its Emit as well
-  // (emission "gathered") gives 30.67 dB here and 28.92 for the gather alone.
-  EXPECT_GT(e.psnr(), 33.05) << "rmse " << e.rmse() << " mean "
-                             << e.mean_error();  // measured 33.36 dB
+  // (emission "gathered") gives 30.67 dB here and 28.92 for the gather alone. The default
+  // fill's level (1.2 x the frame's mean direct radiance) stands for the unseen surfaces'
+  // bounced light as well, which this one-bounce render does not have: room_poles' indirect
+  // comes out brighter than it (33.36 dB with the level at 0.8).
+  EXPECT_GT(e.psnr(), 28.45) << "rmse " << e.rmse() << " mean "
+                             << e.mean_error();  // measured 28.75 dB
   const double gather = indirect_error("room_poles", gather_only_params()).psnr();
   std::cout << "room_poles: indirect, gather only " << gather << " dB\n";
   EXPECT_GT(gather, 29.1);  // measured 29.41
@@ -185,9 +188,10 @@ TEST(AccuracyAgainstCycles, ExtentThicknessBeatsTheConstantWithoutBackFaces) {
 // unseen_radiance "auto" over the temporal chain, composite against the 8-bounce Combined of
 // all 8 frames (as `hbil bench --ref composite=...:Combined`; README "Light from what the
 // frame does not show": the default, where the elevations the frame does not show escape,
-// room_poles 27.61 dB, courtyard 29.04 dB; with unseen_carry (presets/interior.json) 30.49
-// and 31.90; with unseen_radiance 0, 22.60 and 25.69). Bounds 0.3 dB below (0.2 dB for the
-// courtyard carried). On the open
+// room_poles 30.34 dB, courtyard 30.74 dB, 27.56 and 28.97 with that fill's level at 0.8
+// instead of 1.2; with unseen_carry (presets/interior.json) 31.88 and 31.82; with
+// unseen_radiance 0, 22.37 and 25.64). Bounds 0.3 dB below (0.2 dB for the courtyard
+// carried). On the open
 // courtyard the frame's sky must dim the fill: with the frame's mean radiance in every empty
 // direction it measured 25.05 dB.
 TEST(AccuracyAgainstCycles, UnseenRadianceAutoOnBothSamples) {
@@ -195,7 +199,7 @@ TEST(AccuracyAgainstCycles, UnseenRadianceAutoOnBothSamples) {
   off.unseen_radiance_auto = false;
   interior.unseen_carry = true;
   for (const auto& [scene, bound, carried] :
-       {std::tuple{"room_poles", 27.3, 30.15}, {"courtyard", 28.7, 31.7}}) {
+       {std::tuple{"room_poles", 30.05, 31.6}, {"courtyard", 30.45, 31.6}}) {
     const std::string in = std::string(HBIL_SOURCE_DIR) + "/samples/" + scene + "/frame_####.exr";
     pipeline::BenchSettings s;
     s.shot = in;

@@ -104,8 +104,8 @@ TEST(NearFieldIrradiance, BitmaskUniformRadianceMatchesClosedForm) {
 
 // unseen_radiance U: the directions in which face A's points find no surface (the sky of
 // the groove) send U, those towards face B its radiance L: E/π = L (1 − AO) + U AO. "auto":
-// U = kAutoUnseen x the frame's mean DiffCol x DiffDir over its geometry, times what does not
-// escape over the point's hemisphere (unseen.h; unseen_test.cpp holds it to closed forms).
+// U = auto_unseen_factor(false) x the frame's mean DiffCol x DiffDir over its geometry, times what
+// does not escape over the point's hemisphere (unseen.h; unseen_test.cpp holds it to closed forms).
 void check_unseen_radiance(const std::string& method, bool automatic) {
   const Vec3 L{0.5f, 1.f, 2.f};
   const Groove s = lit_groove(90, L);
@@ -117,7 +117,7 @@ void check_unseen_radiance(const std::string& method, bool automatic) {
     size_t n = 0;
     for (size_t i = 0; i < s.g.pixels(); ++i)
       if (s.g.depth[i] < 1e9f) sum += Vec3d(s.g.diffdir[i]), ++n;  // albedo 1
-    U = Vec3(sum / double(n)) * kAutoUnseen;
+    U = Vec3(sum / double(n)) * auto_unseen_factor(false);
     ASSERT_GT(U.x, 0.05f);
     ASSERT_LT(U.x, 0.45f);
   } else {

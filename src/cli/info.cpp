@@ -121,8 +121,9 @@ void info(const std::string& path, const ParamOptions& po) {
       GBuffer g = pixels;
       const Camera c = io::find_camera(f, g, p);
       const ViewGBuffer v = make_view_gbuffer(g, c, p);
-      const Vec3 u = mean_direct_radiance(v, g) * kAutoUnseen;
-      std::cout << "auto = " << u.x << " " << u.y << " " << u.z << " (" << kAutoUnseen
+      const float factor = auto_unseen_factor(p.unseen_carry);
+      const Vec3 u = mean_direct_radiance(v, g) * factor;
+      std::cout << "auto = " << u.x << " " << u.y << " " << u.z << " (" << factor
                 << " x the mean DiffCol x DiffDir + Emit of the frame's geometry)\n";
       // What escapes, from the frame's background (unseen.h), over the hemisphere of a normal
       // facing up, the camera (level) and down.

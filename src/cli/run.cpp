@@ -89,7 +89,7 @@ void run_frames(const RunOptions& o, io::RunLog& log, int& written) {
     if (!job.scene_description().empty())
       std::cerr << "hbil: auto: " << job.scene_description() << "\n";
     if (p.unseen_radiance_auto && gathers(p))
-      std::cerr << "hbil: unseen_radiance auto: per frame, " << kAutoUnseen
+      std::cerr << "hbil: unseen_radiance auto: per frame, " << auto_unseen_factor(p.unseen_carry)
                 << " x the mean DiffCol x DiffDir + Emit of its geometry, times 1 - what its"
                    " background says escapes over each pixel's hemisphere, "
                 << (p.unseen_carry

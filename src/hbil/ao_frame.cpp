@@ -133,7 +133,8 @@ HorizonImage search_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& 
   if (gather) c.fill = Vec3{u, u, u};
   if (gather && p.unseen_radiance_auto) {
     const EscapeProfile escape = escape_profile(v, cam, p.unseen_carry);
-    c.fill = mean_direct_radiance(v, g) * (kAutoUnseen * float(p.unseen_scale));
+    c.fill =
+        mean_direct_radiance(v, g) * (auto_unseen_factor(p.unseen_carry) * float(p.unseen_scale));
     if (cached) {
       c.fill = c.fill * (1.f - EscapeTable(escape).at(Vec3{0, 0, -1}));
     } else {

@@ -54,7 +54,7 @@ struct Params {
   bool gather_radius_auto = true;
   int gather_steps = 16;  // gather-only samples per side beyond radius
   // Radiance of the directions where the gather finds no surface (nothing within
-  // gather_radius, or the screen edge first); "auto": kAutoUnseen x the frame's mean direct
+  // gather_radius, or the screen edge first); "auto": auto_unseen_factor x the frame's mean direct
   // outgoing radiance (ao_frame.h), times what does not escape over each pixel's hemisphere
   // (unseen.h).
   double unseen_radiance = 0.0;

@@ -12,11 +12,12 @@
 // open above it, a wall or a ceiling closes it, a floor seen from above leaves it open). A
 // pixel with normal n then sees, in its empty directions,
 //
-//   fill(n) = kAutoUnseen x (mean direct outgoing radiance of the frame's geometry)
+//   fill(n) = factor x (mean direct outgoing radiance of the frame's geometry)
 //             x (1 − the cosine-weighted escape fraction over n's hemisphere),
 //
-// so that a ground plane under open sky gets almost nothing, and a room whose walls the frame
-// shows gets the whole fill for the elevations it shows (all of them with unseen_carry).
+// (factor: auto_unseen_factor, ao_frame.h) so that a ground plane under open sky gets almost
+// nothing, and a room whose walls the frame shows gets the whole fill for the elevations it shows
+// (all of them with unseen_carry).
 #pragma once
 
 #include <array>
