@@ -652,7 +652,7 @@ TEST(AccuracyAgainstPovRay, RoomIndirectAndCompositeAgainstRadiosity) {
   test::RunResult r;
   // {extra run options, bounds (indirect vs 1 bounce, vs 3 bounces, composite)}
   const std::pair<std::string, std::array<double, 3>> runs[] = {
-      {"", {35.7, 28.35, 29.6}},                         // measured 36.01, 28.65, 29.90 dB
+      {"", {36.55, 29.0, 30.25}},                        // measured 36.87, 29.32, 30.57 dB
       {"--set unseen_radiance=0", {33.5, 27.0, 28.3}}};  // measured 33.87, 27.39, 28.64 dB
   for (const auto& [extra, bound] : runs) {
     SCOPED_TRACE(extra);
