@@ -29,6 +29,7 @@ Params non_default() {
   Params p;
   p.radius = 0.37;
   p.slices = 3;
+  p.slices_auto = false;
   p.steps = 7;
   p.step_power = 1.5;
   p.interleave = false;
@@ -73,6 +74,7 @@ TEST(Params, JsonRoundTripIsIdentity) {
   }
   const Params back = params_from_json(to_json(non_default()), "round trip");
   EXPECT_EQ(back.radius, 0.37);
+  EXPECT_FALSE(back.slices_auto);
   EXPECT_EQ(back.slices, 3);
   EXPECT_FALSE(back.interleave);
   EXPECT_EQ(back.view_layer, "RenderLayer");

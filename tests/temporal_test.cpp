@@ -13,6 +13,7 @@
 #include "analytic_scenes.h"
 #include "hbil/ao_frame.h"
 #include "hbil/reproject.h"
+#include "pipeline/sequence_job.h"
 #include "test_util.h"
 
 namespace hbil {
@@ -263,6 +264,25 @@ TEST(Temporal, SlicesTurnWithTheFrame) {
   EXPECT_NEAR(r, 0.25 * kPi / 32, 1e-6);
   frame_rotation(3, 32, r, j);
   EXPECT_NEAR(r, 0.75 * kPi / 32, 1e-6);
+}
+
+// slices "auto": 1 where the run has a temporal chain (its slices rotate from frame to frame
+// and accumulate), 2 where it has none; a number is kept. Decided on the whole plan, pre-roll
+// included, as the chain is.
+TEST(TemporalChain, SlicesAutoIsOneInAChainAndTwoWithout) {
+  const std::string shot = test::kRoomPoles + "/frame_####.exr";
+  auto slices = [&](const std::string& frames, int preroll, const Params& p) {
+    return pipeline::SequenceJob(pipeline::plan_sequence(shot, frames, preroll, ""), p)
+        .params()
+        .slices;
+  };
+  EXPECT_EQ(slices("1-4", 0, Params{}), 1);
+  EXPECT_EQ(slices("3", 2, Params{}), 1);  // one frame after its pre-roll: a chain
+  EXPECT_EQ(slices("1", 0, Params{}), 2);  // one frame: no chain
+  EXPECT_EQ(slices("1-4", 0, apply_set(Params{}, "temporal=false")), 2);
+  EXPECT_EQ(slices("1-4", 0, apply_set(Params{}, "slices=2")), 2);
+  EXPECT_EQ(slices("1", 0, apply_set(Params{}, "slices=4")), 4);
+  EXPECT_EQ(apply_set(apply_set(Params{}, "slices=3"), "slices=\"auto\"").slices_auto, true);
 }
 
 }  // namespace

@@ -16,7 +16,7 @@ void ParamOptions::add_to(CLI::App& app) {
   radius_opt = app.add_option("--radius", radius, "same as --set radius=R (world units)")
                    ->default_str(CLI::detail::to_string(d.radius));
   slices_opt = app.add_option("--slices", slices, "same as --set slices=N (per pixel)")
-                   ->default_str(std::to_string(d.slices));
+                   ->default_str(d.slices_auto ? "auto" : std::to_string(d.slices));
   steps_opt = app.add_option("--steps", steps, "same as --set steps=N (per side of a slice)")
                   ->default_str(std::to_string(d.steps));
 }

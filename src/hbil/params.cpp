@@ -42,7 +42,9 @@ const std::vector<ParamInfo>& params_table() {
        "AO radius: occluders farther than this from the shaded point are ignored "
        "(set Cycles' World > Ambient Occlusion > Distance to the same value to compare)"},
       {"slices", &Params::slices, 1, 64, "per pixel",
-       "slice directions marched per pixel; with interleave the 4x4 block covers 16x this"},
+       "slice directions marched per pixel; with interleave the 4x4 block covers 16x this; "
+       "\"auto\" (default): 1 in a temporal chain, whose slices rotate from frame to frame and "
+       "accumulate, 2 without one (temporal false, or a run of one frame)"},
       {"steps", &Params::steps, 1, 256, "per side", "depth samples along each side of a slice"},
       {"step_power", &Params::step_power, 1, 4, "exponent",
        "sample spacing along a slice: offset = radius * ((k + jitter) / steps)^step_power; "
@@ -88,9 +90,9 @@ const std::vector<ParamInfo>& params_table() {
       {"unseen_radiance", &Params::unseen_radiance, 0, 1e6, "radiance",
        "the radiance assumed in the directions where the gather finds no surface: none within "
        "gather_radius, or the screen edge first (light from what the frame does not show); "
-       "\"auto\" (default): 0.8 x the frame's mean direct outgoing radiance, DiffCol x "
-       "DiffDir + Emit over its geometry, times the fraction of each pixel's hemisphere that "
-       "the frame's background does not show escaping; 0: none"},
+       "\"auto\" (default): 1.2 x (0.8 x with unseen_carry) the frame's mean direct outgoing "
+       "radiance, DiffCol x DiffDir + Emit over its geometry, times the fraction of each "
+       "pixel's hemisphere that the frame's background does not show escaping; 0: none"},
       {"unseen_carry", &Params::unseen_carry, 0, 1, "bool",
        "unseen_radiance \"auto\": the elevations above and below what the frame shows are "
        "taken to be as open as the frame's top and bottom edges say: background, and a floor "
@@ -202,6 +204,7 @@ json to_json(const Params& p) {
   for (const ParamInfo& info : params_table()) {
     std::visit([&](auto m) { j[info.key] = p.*m; }, info.member);
   }
+  if (p.slices_auto) j["slices"] = "auto";
   if (p.gather_radius_auto) j["gather_radius"] = "auto";
   if (p.thickness_auto) j["thickness"] = "auto";
   if (p.gather_thickness_auto) j["gather_thickness"] = "auto";
@@ -265,18 +268,21 @@ Params params_from_json(const json& j, const std::string& where, Params p) {
                             [&](const ParamInfo& i) { return key == i.key; });
     // gather_radius and thickness: a number, or "auto" (derived from the shot).
     const bool may_be_auto = key == "gather_radius" || key == "thickness" ||
-                             key == "gather_thickness" || key == "unseen_radiance";
+                             key == "gather_thickness" || key == "unseen_radiance" ||
+                             key == "slices";
     bool& auto_flag = key == "gather_radius"     ? p.gather_radius_auto
                       : key == "thickness"       ? p.thickness_auto
                       : key == "unseen_radiance" ? p.unseen_radiance_auto
+                      : key == "slices"          ? p.slices_auto
                                                  : p.gather_thickness_auto;
+    const std::string number_or_auto = "key '" + key + "' must be " +
+                                       (key == "slices" ? "an integer" : "a number") +
+                                       " or \"auto\", got ";
     if (may_be_auto && v.is_string()) {
-      if (v.get<std::string>() != "auto")
-        fail(where, "key '" + key + "' must be a number or \"auto\", got " + v.dump());
+      if (v.get<std::string>() != "auto") fail(where, number_or_auto + v.dump());
       auto_flag = true;
     } else if (row != params_table().end()) {
-      if (may_be_auto && !v.is_number())
-        fail(where, "key '" + key + "' must be a number or \"auto\", got " + v.dump());
+      if (may_be_auto && !v.is_number()) fail(where, number_or_auto + v.dump());
       read_number(p, *row, v, where);
       if (may_be_auto) auto_flag = false;
     } else if (key == "method") {

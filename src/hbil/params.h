@@ -19,6 +19,9 @@ struct Params {
   // --- Horizon search (HBIL §1.3, §2.1) ---
   double radius = 1.0;  // world units: occluders farther than this are ignored
   int slices = 2;       // slices per pixel (paper: 2, 90 degrees apart)
+  // "auto" (the default): 1 in a temporal chain, whose slices rotate from frame to frame and
+  // accumulate, 2 without one (resolve_auto_slices, set by the sequence job; 2 until then).
+  bool slices_auto = true;
   // method, thickness, steps and step_power: the lowest mean AO error against the Cycles AO
   // pass over both Blender samples (sweeps in README "Accuracy"): bitmask, 0.4, 16, 1.
   int steps = 16;              // depth samples per side of a slice
@@ -121,6 +124,13 @@ struct Params {
   int slice_directions() const { return interleave ? 16 * slices : slices; }
   bool wants(const std::string& output) const;
 };
+
+// slices "auto" resolved for a run that has (chain) or has not a temporal chain: 1 or 2;
+// p unchanged where slices is a number.
+inline Params resolve_auto_slices(Params p, bool chain) {
+  if (p.slices_auto) p.slices = chain ? 1 : 2;
+  return p;
+}
 
 // One row of the parameter table: the key, what it means, its unit and its range.
 struct ParamInfo {

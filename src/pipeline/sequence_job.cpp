@@ -122,6 +122,8 @@ SequenceJob::SequenceJob(SequencePlan plan, const Params& requested) : plan_(std
     for (int other : *frames)
       if (other != f) others.push_back(io::open_frame(plan_.input.path(other), other, requested));
   p_ = io::resolve_outputs(first_, requested, &why_dropped_);
+  // slices "auto": the chain is decided on the whole plan, as run() decides it.
+  p_ = resolve_auto_slices(p_, p_.temporal && plan_.preroll.size() + plan_.frames.size() > 1);
   const io::InputFrame& head = plan_.preroll.empty() ? first_ : others.front();
   auto check = [&](const io::InputFrame& in) {
     io::fields_needed(in, p_);  // exit 4, naming the channels looked for
