@@ -188,10 +188,9 @@ TEST(AccuracyAgainstCycles, ExtentThicknessBeatsTheConstantWithoutBackFaces) {
 // unseen_radiance "auto" over the temporal chain, composite against the 8-bounce Combined of
 // all 8 frames (as `hbil bench --ref composite=...:Combined`; README "Light from what the
 // frame does not show": the default, where the elevations the frame does not show escape,
-// room_poles 30.34 dB, courtyard 30.74 dB, 27.56 and 28.97 with that fill's level at 0.8
-// instead of 1.2; with unseen_carry (presets/interior.json) 31.88 and 31.82; with
-// unseen_radiance 0, 22.37 and 25.64). Bounds 0.3 dB below (0.2 dB for the courtyard
-// carried). On the open
+// room_poles 30.22 dB, courtyard 30.73 dB, 27.56 and 28.97 with that fill's level at 0.8
+// instead of 1.2 and 2 slices instead of "auto"'s 1; with unseen_carry (presets/interior.json)
+// 31.72 and 31.82; with unseen_radiance 0, 22.34 and 25.65). Bounds about 0.2 dB below. On the open
 // courtyard the frame's sky must dim the fill: with the frame's mean radiance in every empty
 // direction it measured 25.05 dB.
 TEST(AccuracyAgainstCycles, UnseenRadianceAutoOnBothSamples) {
@@ -199,7 +198,7 @@ TEST(AccuracyAgainstCycles, UnseenRadianceAutoOnBothSamples) {
   off.unseen_radiance_auto = false;
   interior.unseen_carry = true;
   for (const auto& [scene, bound, carried] :
-       {std::tuple{"room_poles", 30.05, 31.6}, {"courtyard", 30.45, 31.6}}) {
+       {std::tuple{"room_poles", 30.05, 31.55}, {"courtyard", 30.55, 31.6}}) {
     const std::string in = std::string(HBIL_SOURCE_DIR) + "/samples/" + scene + "/frame_####.exr";
     pipeline::BenchSettings s;
     s.shot = in;
