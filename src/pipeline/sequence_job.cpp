@@ -219,7 +219,8 @@ void SequenceJob::run(const Hooks& hooks, Overlap overlap_mode, const SH9* given
   std::map<int, CalibrationPoint> solved;
   // A run of one frame (no pre-roll) never feeds a frame its history: its factor is solved
   // without the chain's feedback, as that frame is computed.
-  Params solve_p = p_;
+  // Each solve computes frames alone, without a chain: slices "auto" as for a run of one frame.
+  Params solve_p = resolve_auto_slices(p_, false);
   if (plan_.frames.size() + plan_.preroll.size() == 1) solve_p.feedback = false;
   auto calibrated_scale = [&](int frame, const GBuffer& g, const Camera& cam) {
     std::vector<CalibrationPoint> points;
