@@ -18,9 +18,7 @@ namespace hbil {
 std::vector<Vec3> source_radiance(const GBuffer& g, const std::vector<Vec3>& irradiance) {
   std::vector<Vec3> L(g.pixels());
   for (size_t i = 0; i < g.pixels(); ++i) {
-    const Vec3 e = irradiance.empty() ? g.diffdir[i] : g.diffdir[i] + irradiance[i];
-    L[i] = Vec3{g.diffcol[i].x * e.x, g.diffcol[i].y * e.y, g.diffcol[i].z * e.z};
-    if (g.emit_gathered && !g.emit.empty()) L[i] += g.emit[i];
+    L[i] = g.outgoing(i, irradiance.empty() ? g.diffdir[i] : g.diffdir[i] + irradiance[i]);
   }
   return L;
 }

@@ -60,6 +60,14 @@ struct GBuffer {
   }
 
   size_t pixels() const { return size_t(width) * size_t(height); }
+
+  // Outgoing diffuse radiance at pixel i (unpacked) with irradiance / π `e` there: DiffCol x e,
+  // + Emit where emit_gathered.
+  Vec3 outgoing(size_t i, const Vec3& e) const {
+    Vec3 l{diffcol[i].x * e.x, diffcol[i].y * e.y, diffcol[i].z * e.z};
+    if (emit_gathered && !emit.empty()) l += emit[i];
+    return l;
+  }
 };
 
 // The float an IEEE 754 half (binary16) with these bits stands for, exactly (every half is

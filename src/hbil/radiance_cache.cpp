@@ -31,15 +31,6 @@ bool in_frustum(const Camera& cam, const Vec3d& d) {
   return u >= 0 && u <= cam.width && v >= 0 && v <= cam.height;
 }
 
-// g's outgoing diffuse radiance at pixel i with irradiance / π `e` there:
-// DiffCol x e, + Emit where the gather takes it as light (GBuffer::emit_gathered).
-Vec3 outgoing(const GBuffer& g, size_t i, const Vec3& e) {
-  const Vec3& a = g.diffcol[i];
-  Vec3 l{a.x * e.x, a.y * e.y, a.z * e.z};
-  if (g.emit_gathered && !g.emit.empty()) l += g.emit[i];
-  return l;
-}
-
 }  // namespace
 
 void RadianceCache::add(const ViewGBuffer& v, const Camera& cam, const GBuffer& g,
@@ -58,7 +49,7 @@ void RadianceCache::add(const ViewGBuffer& v, const Camera& cam, const GBuffer& 
         entries_.push_back(
             {Vec3(normalize_or_zero(cam.view_dir_to_world(ray))), Vec3{}, frame, true});
       } else {
-        const Vec3 l = outgoing(g, i, g.diffdir[i] + E[i]);
+        const Vec3 l = g.outgoing(i, g.diffdir[i] + E[i]);
         if (!(std::isfinite(l.x) && std::isfinite(l.y) && std::isfinite(l.z))) continue;
         entries_.push_back({Vec3(cam.view_to_world(Vec3d(v.position[i]))), l, frame, false});
       }
@@ -76,7 +67,7 @@ Vec3 RadianceCache::panorama_ambient(const GBuffer& pano, float background) {
       const size_t i = size_t(y) * pano.width + x;
       all += w;
       if (!(pano.depth[i] < background)) continue;
-      direct = direct + Vec3d(outgoing(pano, i, pano.diffdir[i])) * w;
+      direct = direct + Vec3d(pano.outgoing(i, pano.diffdir[i])) * w;
       albedo = albedo + Vec3d(pano.diffcol[i]) * w;
     }
   }
@@ -95,7 +86,7 @@ void RadianceCache::set_panorama(const GBuffer& pano, float background, int fram
     for (int x = s / 2; x < pano.width; x += s) {
       const size_t i = size_t(y) * pano.width + x;
       if (!(pano.depth[i] < background)) continue;
-      const Vec3 l = outgoing(pano, i, pano.diffdir[i] + ambient);
+      const Vec3 l = pano.outgoing(i, pano.diffdir[i] + ambient);
       if (!(std::isfinite(l.x) && std::isfinite(l.y) && std::isfinite(l.z))) continue;
       panorama_.push_back({pano.position[i], l, frame, false});
     }
