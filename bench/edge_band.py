@@ -6,11 +6,11 @@ the interior, against a path-traced reference (README "Light from beyond the fra
 
 OUT_PATTERN: hbil's output frames (out/frame_####.exr), with or without a guard band: their
 pixels are taken where the reference's are (the display window), by the EXR windows.
-REF_PATTERN: Blender main renders of the frame alone (Combined, DiffCol, DiffInd, Depth).
+REF_PATTERN: Blender main renders of the frame alone (Combined, DiffCol, DiffInd, AO, Depth).
 FRAMES: A-B. BAND: the band's width as a fraction of the frame's width and height (0.1).
-Prints, per frame and over all frames, the RMSE of composite (R, G, B against Combined) and
-of indirect (against DiffCol x DiffInd) in the band and inside it, over the reference's
-geometry pixels (depth below 1e9).
+Prints, per frame and over all frames, the RMSE of composite (R, G, B against Combined), of
+indirect (against DiffCol x DiffInd) and of ao (against the AO pass) in the band and inside
+it, over the reference's geometry pixels (depth below 1e9).
 
 Needs the python3 OpenImageIO bindings (Debian: python3-openimageio) and numpy.
 """
@@ -48,9 +48,10 @@ def main(argv):
     band = float(argv[3]) if len(argv) > 3 else 0.1
     a, b = (int(v) for v in frames.split("-"))
     sums = {k: [0.0, 0] for k in ("composite band", "composite inside", "indirect band",
-                                  "indirect inside")}
-    print("| frame | composite band | composite inside | indirect band | indirect inside |")
-    print("|---|---|---|---|---|")
+                                  "indirect inside", "ao band", "ao inside")}
+    print("| frame | composite band | composite inside | indirect band | indirect inside "
+          "| ao band | ao inside |")
+    print("|---|---|---|---|---|---|---|")
     for f in range(a, b + 1):
         rs, rp = read(ref_pat.replace("####", "%04d" % f))
         os_, op = read(out_pat.replace("####", "%04d" % f))
@@ -69,6 +70,7 @@ def main(argv):
             "indirect": (plane(os_, op, "indirect.R", "indirect.G", "indirect.B"),
                          plane(rs, rp, "DiffCol.R", "DiffCol.G", "DiffCol.B") *
                          plane(rs, rp, "DiffInd.R", "DiffInd.G", "DiffInd.B")),
+            "ao": (plane(os_, op, "ao.Y"), plane(rs, rp, "AO.R")),
         }
         row = []
         for layer, (t, r) in pairs.items():
