@@ -144,6 +144,39 @@ TEST(Temporal, CutDropsTheHistory) {
   EXPECT_EQ(0, std::memcmp(given.ao.data(), first4.ao.data(), given.ao.size() * sizeof(float)));
 }
 
+// slices "auto" in a chain (resolved to 1): a frame without history, the chain's first or
+// the first after a cut, is searched with 2 slices as a single frame is; the frames with
+// history march 1.
+TEST(Temporal, SlicesAutoMarchesTwoWhereThereIsNoHistory) {
+  const Scene a = groove(0), b = groove(2), far = groove(60);
+  Params one_p = resolve_auto_slices(params(), true), two_p = params(), fixed_one = params();
+  two_p.slices = 2, two_p.slices_auto = false;
+  fixed_one.slices = 1, fixed_one.slices_auto = false;
+  ASSERT_EQ(one_p.slices, 1);
+  TemporalChain chain(one_p), two(two_p), two_cut(two_p), one(fixed_one);
+  const AoFrame f1 = chain.process(a.g, a.cam, 1, false);
+  test::expect_same_bytes(f1.ao, two.process(a.g, a.cam, 1, false).ao, "first frame ao");
+  one.process(a.g, a.cam, 1, false);
+  // Frame 2 has history: one slice. It differs from the 2-slice chain's frame 2, and from a
+  // chain of one slice throughout only through what frame 1 accumulated.
+  const AoFrame f2 = chain.process(b.g, b.cam, 2, false);
+  const AoFrame t2 = two.process(b.g, b.cam, 2, false);
+  const AoFrame o2 = one.process(b.g, b.cam, 2, false);
+  auto differs = [](const std::vector<float>& x, const std::vector<float>& y) {
+    return x.size() == y.size() && std::memcmp(x.data(), y.data(), x.size() * sizeof(float)) != 0;
+  };
+  EXPECT_TRUE(differs(f2.ao, t2.ao));
+  EXPECT_TRUE(differs(f2.ao, o2.ao));
+  // After a cut: 2 slices again, as a fresh 2-slice chain's first frame.
+  TemporalReport rep;
+  const AoFrame c = chain.process(far.g, far.cam, 3, false, nullptr, &rep);
+  ASSERT_TRUE(rep.cut);
+  test::expect_same_bytes(c.ao, two_cut.process(far.g, far.cam, 3, false).ao, "after the cut");
+  test::expect_same_bytes(c.irradiance,
+                          TemporalChain(two_p).process(far.g, far.cam, 3, false).irradiance,
+                          "irradiance after the cut");
+}
+
 TEST(Temporal, AutoOutputsAreResolvedOnTheFirstFrame) {
   const Scene s = groove();
   TemporalChain chain{Params{}};  // outputs "auto": the groove has DiffCol and DiffDir

@@ -44,7 +44,8 @@ const std::vector<ParamInfo>& params_table() {
       {"slices", &Params::slices, 1, 64, "per pixel",
        "slice directions marched per pixel; with interleave the 4x4 block covers 16x this; "
        "\"auto\" (default): 1 in a temporal chain, whose slices rotate from frame to frame and "
-       "accumulate, 2 without one (temporal false, or a run of one frame)"},
+       "accumulate (2 on its first frame and the first after a cut), 2 without one (temporal "
+       "false, or a run of one frame)"},
       {"steps", &Params::steps, 1, 256, "per side", "depth samples along each side of a slice"},
       {"step_power", &Params::step_power, 1, 4, "exponent",
        "sample spacing along a slice: offset = radius * ((k + jitter) / steps)^step_power; "

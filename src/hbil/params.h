@@ -21,6 +21,7 @@ struct Params {
   int slices = 2;       // slices per pixel (paper: 2, 90 degrees apart)
   // "auto" (the default): 1 in a temporal chain, whose slices rotate from frame to frame and
   // accumulate, 2 without one (resolve_auto_slices, set by the sequence job; 2 until then).
+  // The chain searches a frame without history with 2 (TemporalChain::run).
   bool slices_auto = true;
   // method, thickness, steps and step_power: the lowest mean AO error against the Cycles AO
   // pass over both Blender samples (sweeps in README "Accuracy"): bitmask, 0.4, 16, 1.

@@ -194,7 +194,10 @@ AoFrame TemporalChain::run(const GBuffer& g, GBuffer* release, const Camera& cam
   // The colour fields as floats from here on: the history and the feedback's temporaries
   // are no longer in memory.
   if (release) release->unpack();
-  HorizonImage h = search_frame(v, g, cam, p_, std::move(in));
+  // slices "auto": a frame without history (the chain's first, or the first after a cut) is
+  // searched as a single frame is, with 2 slices: nothing accumulated makes up for one yet.
+  HorizonImage h =
+      search_frame(v, g, cam, history ? p_ : resolve_auto_slices(p_, false), std::move(in));
   std::vector<float>().swap(v.thickness);  // only the search reads it
 
   // Accumulation with the history; the result becomes the next frame's history. It is
