@@ -120,6 +120,11 @@ void run_frames(const RunOptions& o, io::RunLog& log, int& written) {
               << "\n";
     std::cerr << "hbil: search: " << describe_search(p, first.spec.width, first.spec.height)
               << "\n";
+    std::cerr << "hbil: slices: " << p.slices << " a pixel"
+              << (!p.slices_auto  ? ""
+                  : p.slices == 1 ? " (auto, a temporal chain: 2 on a frame without history)"
+                                  : " (auto, no temporal chain)")
+              << "\n";
   }
   // Outputs and display images: settings checked before any frame is computed.
   pipeline::FrameOutput output(
