@@ -188,9 +188,10 @@ TEST(AccuracyAgainstCycles, ExtentThicknessBeatsTheConstantWithoutBackFaces) {
 // unseen_radiance "auto" over the temporal chain, composite against the 8-bounce Combined of
 // all 8 frames (as `hbil bench --ref composite=...:Combined`; README "Light from what the
 // frame does not show": the default, where the elevations the frame does not show escape,
-// room_poles 30.22 dB, courtyard 30.73 dB, 27.56 and 28.97 with that fill's level at 0.8
-// instead of 1.2 and 2 slices instead of "auto"'s 1; with unseen_carry (presets/interior.json)
-// 31.72 and 31.82; with unseen_radiance 0, 22.34 and 25.65). Bounds about 0.2 dB below. On the open
+// room_poles 30.28 dB, courtyard 30.73 dB, 27.56 and 28.97 with that fill's level at 0.8
+// instead of 1.2 and 2 slices instead of "auto"'s 1 (2 on the chain's first frame); with
+// unseen_carry (presets/interior.json) 31.80 and 31.81; with unseen_radiance 0, 22.36 and
+// 25.64). Bounds about 0.2 dB below. On the open
 // courtyard the frame's sky must dim the fill: with the frame's mean radiance in every empty
 // direction it measured 25.05 dB.
 TEST(AccuracyAgainstCycles, UnseenRadianceAutoOnBothSamples) {
