@@ -196,8 +196,8 @@ AoFrame TemporalChain::run(const GBuffer& g, GBuffer* release, const Camera& cam
   if (release) release->unpack();
   // slices "auto": a frame without history (the chain's first, or the first after a cut) is
   // searched as a single frame is, with 2 slices: nothing accumulated makes up for one yet.
-  HorizonImage h =
-      search_frame(v, g, cam, history ? p_ : resolve_auto_slices(p_, false), std::move(in));
+  HorizonImage h = history ? search_frame(v, g, cam, p_, std::move(in))
+                           : search_frame(v, g, cam, resolve_auto_slices(p_, false), std::move(in));
   std::vector<float>().swap(v.thickness);  // only the search reads it
 
   // Accumulation with the history; the result becomes the next frame's history. It is
