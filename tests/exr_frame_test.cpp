@@ -607,6 +607,44 @@ TEST_F(ExrFrame, FresnelLayersAreReadOnlyWhenMapped) {
   EXPECT_FALSE(needs(ao_only, "f0"));  // only the outputs that reflect light read it
 }
 
+TEST_F(ExrFrame, EscapePassIsReadOnlyWhenMappedAndForTheAutomaticFill) {
+  // Blender's AO pass (R = G = B) rendered with a distance beyond the scene: what escapes it.
+  const std::string path = file("frame_0002.exr");
+  auto channels = blender_channels("ViewLayer");
+  for (const char* c : {"ViewLayer.DiffCol.R", "ViewLayer.DiffCol.G", "ViewLayer.DiffCol.B",
+                        "ViewLayer.DiffDir.R", "ViewLayer.DiffDir.G", "ViewLayer.DiffDir.B"})
+    channels.push_back(c);
+  const auto value = [&](int x, int y, int c) {
+    return channels[c] == "ViewLayer.AO.R" ? 0.0625f * float(x % 16) : value_for(channels[c], x, y);
+  };
+  test::write_exr(path, kW, kH, channels, value);
+  Params p;
+  p.outputs = {"indirect"};
+  auto needs = [&](const Params& q, const std::string& field) {
+    const auto n = fields_needed(open_frame(path, 2, q), q);
+    return std::find(n.begin(), n.end(), field) != n.end();
+  };
+  EXPECT_FALSE(needs(p, "escape"));  // off by default: an AO pass is usually a short one
+  const Params escape = apply_set(p, "passes.escape=AO");
+  EXPECT_TRUE(needs(escape, "escape"));
+  const GBuffer g = read_fields(open_frame(path, 2, escape), {"escape"}, escape);
+  ASSERT_EQ(g.escape.size(), g.pixels());
+  EXPECT_EQ(g.escape[size_t(kW) + 5], 0.3125f);  // AO.R of pixel (5, 1)
+  Params fixed = escape;
+  fixed.unseen_radiance_auto = false;  // a fixed fill does not read it
+  EXPECT_FALSE(needs(fixed, "escape"));
+  Params ao_only = escape;
+  ao_only.outputs = {"ao"};  // nor do outputs that gather no light
+  EXPECT_FALSE(needs(ao_only, "escape"));
+  // A non-finite value names the channel and the pixel.
+  const std::string bad = file("frame_0003.exr");
+  test::write_exr(bad, kW, kH, channels, [&](int x, int y, int c) {
+    return channels[c] == "ViewLayer.AO.R" && x == 4 && y == 9 ? std::nanf("") : value(x, y, c);
+  });
+  expect_error([&] { read_fields(open_frame(bad, 3, escape), {"escape"}, escape); }, Exit::bad_data,
+               {bad, "ViewLayer.AO.R", "non-finite escape", "pixel (4, 9)"});
+}
+
 TEST_F(ExrFrame, CameraSolvedFromPositionWithoutSidecar) {
   const std::string src = test::kRoomPoles + "/frame_0001.exr";
   if (!fs::exists(src)) GTEST_SKIP() << src << " is absent";

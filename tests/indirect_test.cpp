@@ -152,6 +152,47 @@ TEST(UnseenRadiance, AutoIsAFractionOfTheFramesDirectOutgoingRadiance) {
   check_unseen_radiance("bitmask", true);
 }
 
+// With an escape pass e (GBuffer::escape: what escapes the whole scene, cosine-weighted), the
+// empty directions of a face-A point, (1 − occluded) of its hemisphere, send
+// U' = auto_unseen_factor(true) x the frame's mean direct radiance from the share 1 − e / (1 −
+// occluded) of them that the pass says a surface blocks: E/π = L occluded + U' max(0, 1 −
+// occluded − e). e = 0: every empty direction is blocked; e >= 1 − occluded: none is.
+void check_escape_pass(const std::string& method) {
+  const Vec3 L{0.5f, 1.f, 2.f};
+  Groove s = lit_groove(90, L);
+  Params p = gather_params(method);
+  p.unseen_radiance_auto = true;
+  Vec3d sum;
+  size_t n = 0;
+  for (size_t i = 0; i < s.g.pixels(); ++i)
+    if (s.g.depth[i] < 1e9f) sum += Vec3d(s.g.diffdir[i]), ++n;  // albedo 1
+  const Vec3 U = Vec3(sum / double(n)) * auto_unseen_factor(true);
+  ASSERT_GT(U.x, 0.05f);
+  for (float e : {0.f, 0.2f, 0.5f, 1.f}) {
+    s.g.escape.assign(s.g.pixels(), e);
+    const AoFrame f = compute_ao_frame(s.g, s.cam, p);
+    double lit = 0;  // how many points got some of the fill
+    const int checked = for_each_face_a_point(s, [&](size_t i, double occluded, double d) {
+      const double tol = method == "bitmask" ? 0.04 : 0.02;
+      const double blocked = std::max(0.0, 1 - occluded - e);
+      lit += blocked > 0.05;
+      EXPECT_NEAR(f.irradiance[i].x, L.x * occluded + U.x * blocked, tol * L.x) << e << " " << d;
+      EXPECT_NEAR(f.irradiance[i].z, L.z * occluded + U.z * blocked, tol * L.z) << e << " " << d;
+      EXPECT_NEAR(f.ao[i], 1 - occluded, tol);  // ao is not lit by it
+    });
+    EXPECT_GT(checked, 50);
+    if (e < 0.5f) EXPECT_GT(lit, 0.9 * checked) << e;  // the fill is there to be measured
+    if (e == 1.f) EXPECT_EQ(lit, 0);
+  }
+}
+
+TEST(UnseenRadiance, BitmaskEscapePassFillsOnlyWhatASurfaceBlocks) {
+  check_escape_pass("bitmask");
+}
+TEST(UnseenRadiance, HorizonEscapePassFillsOnlyWhatASurfaceBlocks) {
+  check_escape_pass("horizon");
+}
+
 // Face B glows, Emit = L, with no direct light. Where the render's DiffDir already holds the
 // light emitters cast (Cycles; emit_gathered false) the gather adds none of it on face A; where
 // it does not (a POV-Ray import; true) face A receives it as from any surface of radiance L:

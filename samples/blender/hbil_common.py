@@ -89,6 +89,10 @@ def parse_args():
     p.add_argument("--size", type=parse_size, default=RES, metavar="WxH")
     p.add_argument("--bounces", type=non_negative, default=None, metavar="N")
     p.add_argument("--overscan", type=float, default=0.0, metavar="PERCENT")
+    # The AO pass's distance (World > Ambient Occlusion > Distance), in metres: 1 matches
+    # hbil's default radius (the samples' ao reference); a distance beyond the scene makes
+    # the AO pass the fraction of each pixel's hemisphere that escapes the whole scene.
+    p.add_argument("--ao-distance", type=float, default=1.0, metavar="M")
     p.add_argument("--save-blend")
     p.add_argument("--no-render", action="store_true")
     return p.parse_args(argv)
@@ -456,7 +460,8 @@ def run(name, build, film_transparent=False):
     scene = clear_scene()
     scene.name = name
     build(scene)
-    configure(scene, a.mode, a.samples, a.seed, size=a.size, bounces=a.bounces)
+    configure(scene, a.mode, a.samples, a.seed, ao_distance=a.ao_distance, size=a.size,
+              bounces=a.bounces)
     scene.render.film_transparent = film_transparent
     if a.save_blend:
         bpy.ops.wm.save_as_mainfile(filepath=os.path.abspath(a.save_blend), compress=True)

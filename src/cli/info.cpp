@@ -121,10 +121,20 @@ void info(const std::string& path, const ParamOptions& po) {
       GBuffer g = pixels;
       const Camera c = io::find_camera(f, g, p);
       const ViewGBuffer v = make_view_gbuffer(g, c, p);
-      const float factor = auto_unseen_factor(p.unseen_carry);
+      const bool escape_pass = !g.escape.empty();
+      const float factor = auto_unseen_factor(p.unseen_carry || escape_pass);
       const Vec3 u = mean_direct_radiance(v, g) * factor;
       std::cout << "auto = " << u.x << " " << u.y << " " << u.z << " (" << factor
                 << " x the mean DiffCol x DiffDir + Emit of the frame's geometry)\n";
+      if (escape_pass) {
+        double sum = 0;
+        size_t n = 0;
+        for (size_t i = 0; i < g.escape.size(); ++i)
+          if (!v.is_background(i)) sum += std::clamp(g.escape[i], 0.f, 1.f), ++n;
+        std::cout << "  escape pass: " << (n ? sum / double(n) : 0.0)
+                  << " of the geometry's hemisphere escapes the scene, on average (each pixel's "
+                     "fill: auto x the share of its empty directions that a surface blocks)\n";
+      }
       // What escapes, from the frame's background (unseen.h), over the hemisphere of a normal
       // facing up, the camera (level) and down.
       const EscapeTable escape(escape_profile(v, c, p.unseen_carry));

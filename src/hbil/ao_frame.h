@@ -67,6 +67,10 @@ Params resolve_frame_outputs(const GBuffer& g, const Params& requested);
 // pixel, what does not escape over its hemisphere (unseen.h). The factor is the fill's level:
 //  - with unseen_carry, 0.8, chosen on samples/room_poles (the best of 0.3-1.5 for the
 //    composite against the 8-bounce render over its camera move);
+//  - with an escape pass (GBuffer::escape, which says which directions a surface blocks, so
+//    that only those get the fill), 0.8 as well: of 0.6, 0.8, 1.0 and 1.2, the largest that
+//    lowers the composite of none of the ten scenes of the README's unseen table (1.0 gains
+//    0.8-2.5 dB more on nine of them and loses 2.5 dB on the study's camera move);
 //  - where the elevations the frame does not show escape (the default), 1.2: fewer
 //    directions get the fill there, and each needs more of it. Of 0.8, 1.2 and 1.6, the
 //    largest that lowers the composite of no scene of the README's unseen table but the

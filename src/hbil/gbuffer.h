@@ -32,6 +32,10 @@ struct GBuffer {
   // Raster offset (du, dv) per pixel from its centre to where its surface was in the
   // previous frame (from Blender's Vector pass), 2 floats per pixel.
   std::vector<float> motion;
+  // The cosine-weighted fraction of each pixel's hemisphere from which no surface of the whole
+  // scene is hit (Cycles' AO pass rendered with World > Ambient Occlusion > Distance beyond
+  // the scene); optional, read by unseen_radiance "auto" (unseen.h).
+  std::vector<float> escape;
   // Passed through into the composite when present (Blender names: Env, GlossCol, ...).
   std::vector<Vec3> env, glosscol, glossdir, glossind, transcol, transdir, transind;
 

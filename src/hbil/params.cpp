@@ -29,7 +29,8 @@ std::map<std::string, json> Params::default_passes() {
           {"backdepth", "BackFaces.Depth.Z"},
           {"f0", ""},
           {"metallic", ""},
-          {"vector", "Vector"}};
+          {"vector", "Vector"},
+          {"escape", ""}};
 }
 
 bool Params::wants(const std::string& output) const {
@@ -156,9 +157,9 @@ const std::vector<ParamInfo>& params_table() {
 
 const std::vector<std::string>& gbuffer_fields() {
   static const std::vector<std::string> f = {
-      "depth",    "normal",   "position",  "alpha",    "diffcol",  "diffdir",
-      "emit",     "env",      "glosscol",  "glossdir", "glossind", "transcol",
-      "transdir", "transind", "backdepth", "f0",       "metallic", "vector"};
+      "depth",     "normal",   "position", "alpha",    "diffcol",  "diffdir",  "emit",
+      "env",       "glosscol", "glossdir", "glossind", "transcol", "transdir", "transind",
+      "backdepth", "f0",       "metallic", "vector",   "escape"};
   return f;
 }
 

@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "hbil/reduced.h"
+
 namespace hbil {
 
 namespace {
@@ -149,6 +151,32 @@ float EscapeTable::at(const Vec3& n) const {
   const int k = std::min(int(u), kTable - 2);
   const float a = u - float(k);
   return table_[size_t(k)] * (1.f - a) + table_[size_t(k + 1)] * a;
+}
+
+std::vector<Vec3> escape_fill_map(const ViewGBuffer& sv, const std::vector<float>& escape,
+                                  const std::vector<float>& reach, const Vec3& fill) {
+  std::vector<Vec3> out(sv.pixels());
+  tbb::parallel_for(0, sv.height, [&](int y) {
+    for (int x = 0; x < sv.width; ++x) {
+      const size_t i = size_t(y) * sv.width + x;
+      if (sv.is_background(i)) continue;
+      const float e = std::clamp(escape[i], 0.f, 1.f), a = reach[i];
+      // a <= e: the search leaves no more open than the scene does (or a noisy e says so).
+      out[i] = a > e ? fill * (1.f - e / a) : Vec3{};
+    }
+  });
+  return out;
+}
+
+std::vector<float> escape_at_view(const ViewGBuffer& v, const ViewGBuffer& sv, int f,
+                                  const std::vector<float>& e, float depth_tolerance) {
+  if (f == 1) return e;
+  std::vector<Vec3> as_rgb(e.size());
+  for (size_t i = 0; i < e.size(); ++i) as_rgb[i] = Vec3{e[i], e[i], e[i]};
+  const std::vector<Vec3> r = reduce_radiance(v, sv, f, as_rgb, depth_tolerance);
+  std::vector<float> out(r.size());
+  for (size_t i = 0; i < r.size(); ++i) out[i] = r[i].x;
+  return out;
 }
 
 std::vector<Vec3> unseen_fill_map(const ViewGBuffer& sv, const EscapeProfile& profile,

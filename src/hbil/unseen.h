@@ -62,4 +62,27 @@ class EscapeTable {
 std::vector<Vec3> unseen_fill_map(const ViewGBuffer& sv, const EscapeProfile& profile,
                                   const Vec3& fill);
 
+// With the renderer's escape pass (GBuffer::escape) the frame need not guess. Per pixel, e is
+// the cosine-weighted fraction of its hemisphere from which no surface of the whole scene is
+// hit, and a the fraction the screen-space search leaves unblocked within its reach (its ao).
+// Of the directions the search finds empty, a surface it cannot see blocks the fraction
+// 1 − e / a, and what they see is
+//
+//   fill x clamp(1 − e / a, 0, 1)
+//
+// in place of fill x (1 − the frame's escape fraction): nothing over a table top in a void or
+// a ground plane under an open sky, the whole fill in a closed room, and, beside an object the
+// search does see, only what lies beyond it (e and a both count that object).
+//
+// `escape`: e at the searched view's pixels (escape_at_view); `reach`: a at the same pixels.
+// Background pixels 0. The same for any thread count.
+std::vector<Vec3> escape_fill_map(const ViewGBuffer& sv, const std::vector<float>& escape,
+                                  const std::vector<float>& reach, const Vec3& fill);
+// The escape pass `e` (one value per pixel of v, the full-resolution view) at the pixels of
+// sv = reduce_view(v, f) (f = 1: sv is v): the mean of e over each texel's f x f block of v,
+// over the pixels on the texel's own surface (reduce_radiance's test), which also averages
+// the noise of a render made with few samples.
+std::vector<float> escape_at_view(const ViewGBuffer& v, const ViewGBuffer& sv, int f,
+                                  const std::vector<float>& e, float depth_tolerance);
+
 }  // namespace hbil

@@ -26,11 +26,13 @@ using nlohmann::json;
 
 const std::vector<std::string>& field_components(const std::string& field) {
   static const std::vector<std::string> depth = {"Z"}, xyz = {"X", "Y", "Z"}, alpha = {"A"},
-                                        rgb = {"R", "G", "B"}, value = {"X"}, motion = {"X", "Y"};
+                                        rgb = {"R", "G", "B"}, value = {"X"}, motion = {"X", "Y"},
+                                        red = {"R"};
   if (field == "depth" || field == "backdepth") return depth;
   if (field == "normal" || field == "position") return xyz;
   if (field == "alpha") return alpha;
   if (field == "metallic") return value;  // a Blender value AOV: <layer>.<name>.X
+  if (field == "escape") return red;      // Blender's AO pass: <layer>.AO.R (R = G = B)
   if (field == "vector") return motion;   // Blender's Vector: X, Y towards the previous frame
   return rgb;  // colour passes: diffcol, diffdir, emit, env, gloss*, trans*
 }
@@ -212,6 +214,8 @@ std::vector<std::string> fields_needed(const InputFrame& f, const Params& reques
     require_fields(f, {"diffcol", "diffdir"}, "irradiance, indirect and composite");
     need.insert(need.end(), {"diffcol", "diffdir"});
     if (f.has("emit")) need.push_back("emit");
+    // What escapes the whole scene, for the fill of unseen_radiance "auto" (unseen.h).
+    if (p.unseen_radiance_auto && f.has("escape")) need.push_back("escape");
   }
   // HBIL eq. 19: the receiver's (1 − F0) on the light it reflects diffusely, from F0 or else
   // from metallic, when a preset maps one.
@@ -373,6 +377,7 @@ GBuffer read_fields(const InputFrame& f, const std::vector<std::string>& fields,
     if (field == "backdepth") return g.backdepth;
     if (field == "alpha") return g.alpha;
     if (field == "vector") return g.motion;
+    if (field == "escape") return g.escape;
     return g.metallic;
   };
   std::vector<FieldTarget> targets;

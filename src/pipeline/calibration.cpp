@@ -147,6 +147,7 @@ std::pair<GBuffer, Camera> subsample(const GBuffer& g, const Camera& cam, int m)
   s.emit_gathered = g.emit_gathered;
   pick(g.f0, s.f0);
   pick(g.metallic, s.metallic);
+  pick(g.escape, s.escape);
   for (const auto& [name, bits] : g.packed) {
     std::vector<Vec3>* out = s.rgb(name);
     if (!out || bits.size() != 3 * g.pixels()) continue;
