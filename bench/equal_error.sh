@@ -13,6 +13,12 @@
 #                                               (samples/blender/panorama.py, 128x64, 4 spp;
 #                                               README "A panorama of each frame"), whose
 #                                               Cycles render time counts as hbil's
+#   ESCAPE=CHANNEL ESCAPE_SECONDS=S ...         hbil with passes.escape=CHANNEL (the input
+#                                               frames must hold it: an AO pass rendered with
+#                                               a distance beyond the scene); S, the Cycles
+#                                               render time that pass costs per frame, counts
+#                                               as hbil's (README "What escapes the scene,
+#                                               from the render")
 #   CALIBRATE=1 ...                             hbil calibrated (`calibration`) on the
 #                                               ladder's 1-spp full-GI render of the first
 #                                               frame, whose Cycles render time, spread over
@@ -149,6 +155,13 @@ for s in $scenes; do
     pano=(--set "panorama=$work/$s/pano/pano_####.exr")
     cp "$work/$s/pano/seconds" "$work/$s/bench_panorama"
   fi
+  esc=()
+  rm -f "$work/$s/bench_escape"
+  if [ -n "${ESCAPE:-}" ]; then
+    [ -n "${ESCAPE_SECONDS:-}" ] || { echo "equal_error.sh: ESCAPE needs ESCAPE_SECONDS" >&2; exit 2; }
+    esc=(--set "passes.escape=$ESCAPE")
+    echo "$ESCAPE_SECONDS" > "$work/$s/bench_escape"
+  fi
   cal=()
   if [ -n "${CALIBRATE:-}" ]; then
     # bench counts the calibration render's own time (its header's) over the frames.
@@ -157,7 +170,7 @@ for s in $scenes; do
     cal=(--set "calibration=$c")
   fi
   log "$s: hbil bench, $runs runs"
-  "$hbil" bench "$in" -o "$work/$s/bench" -q --runs "$runs" --preset "$preset" "${pano[@]}" "${cal[@]}" \
+  "$hbil" bench "$in" -o "$work/$s/bench" -q --runs "$runs" --preset "$preset" "${pano[@]}" "${esc[@]}" "${cal[@]}" \
     --frames "$frames" --ref "composite=$in:Combined" "${full[@]}" > /dev/null
   "$hbil" bench "$in" -o "$work/$s/bench_direct" -q --preset presets/default.json \
     --frames "$frames" --ref "composite=$in:Combined" "${direct[@]}" > /dev/null
@@ -179,7 +192,7 @@ for s in scenes:
             return float(open("%s/%s/bench_%s" % (work, s, name)).read())
         except OSError:
             return 0.0
-    t_pano = extra("panorama")
+    t_pano = extra("panorama") + extra("escape")
     t_cal = c.get("calibration_render_seconds_per_frame", 0.0)
     if t_cal is None:
         sys.exit("equal_error.sh: %s: the calibration render has no render time" % s)
@@ -211,8 +224,9 @@ for s in scenes:
     ladders.append("\n### %s\n\nhbil: %.3f s/frame (runs: %s), composite PSNR %.2f dB; %s\n" % (
         s, t_h, ", ".join("%.3f" % t for t in c["runs"]), p, j["machine"]))
     if t_pano > 0:
-        ladders.append("(hbil's %.3f s/frame: its run, %.3f, plus the panorama's Cycles render "
-                       "time, %.4f)\n" % (t_h, t_run, t_pano))
+        ladders.append("(hbil's %.3f s/frame: its run, %.3f, plus the %s's Cycles render "
+                       "time, %.4f)\n" % (t_h, t_run, "escape pass" if extra("escape") else
+                                           "panorama", t_pano))
     if t_cal > 0:
         ladders.append("(hbil's %.3f s/frame: its run, %.3f, plus the calibration render's "
                        "Cycles time over the frames, %.4f)\n" % (t_h, t_run, t_cal))

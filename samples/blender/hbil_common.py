@@ -91,7 +91,8 @@ def parse_args():
     p.add_argument("--overscan", type=float, default=0.0, metavar="PERCENT")
     # The AO pass's distance (World > Ambient Occlusion > Distance), in metres: 1 matches
     # hbil's default radius (the samples' ao reference); a distance beyond the scene makes
-    # the AO pass the fraction of each pixel's hemisphere that escapes the whole scene.
+    # the AO pass the fraction of each pixel's hemisphere that escapes the whole scene; 0
+    # renders no AO pass.
     p.add_argument("--ao-distance", type=float, default=1.0, metavar="M")
     p.add_argument("--save-blend")
     p.add_argument("--no-render", action="store_true")
@@ -371,7 +372,7 @@ def configure(scene, mode, samples, seed, ao_distance=1.0, size=RES, bounces=Non
     vl.use_pass_transmission_indirect = False
     vl.use_pass_emit = main
     vl.use_pass_environment = main
-    vl.use_pass_ambient_occlusion = main
+    vl.use_pass_ambient_occlusion = main and ao_distance > 0
     vl.use_pass_object_index = False
     vl.use_pass_material_index = False
     vl.cycles.denoising_store_passes = False

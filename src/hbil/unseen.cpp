@@ -6,7 +6,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "hbil/reduced.h"
+#include "hbil/spatial_filter.h"
 
 namespace hbil {
 
@@ -170,12 +170,26 @@ std::vector<Vec3> escape_fill_map(const ViewGBuffer& sv, const std::vector<float
 
 std::vector<float> escape_at_view(const ViewGBuffer& v, const ViewGBuffer& sv, int f,
                                   const std::vector<float>& e, float depth_tolerance) {
-  if (f == 1) return e;
-  std::vector<Vec3> as_rgb(e.size());
-  for (size_t i = 0; i < e.size(); ++i) as_rgb[i] = Vec3{e[i], e[i], e[i]};
-  const std::vector<Vec3> r = reduce_radiance(v, sv, f, as_rgb, depth_tolerance);
-  std::vector<float> out(r.size());
-  for (size_t i = 0; i < r.size(); ++i) out[i] = r[i].x;
+  const int r = std::max(kEscapeRadius, f / 2);
+  std::vector<float> out(sv.pixels());
+  tbb::parallel_for(0, sv.height, [&](int j) {
+    for (int i = 0; i < sv.width; ++i) {
+      const size_t k = size_t(j) * sv.width + i;
+      if (sv.is_background(k)) continue;
+      const Vec3 &P = sv.position[k], &n = sv.normal[k];
+      const float tol = depth_tolerance * P.z;
+      const int cx = f * i, cy = f * j;  // the texel's own pixel of v
+      float sum = 0, w = 0;
+      for (int y = std::max(0, cy - r); y <= std::min(v.height - 1, cy + r); ++y)
+        for (int x = std::max(0, cx - r); x <= std::min(v.width - 1, cx + r); ++x) {
+          const size_t p = size_t(y) * v.width + x;
+          if (v.is_background(p) || !same_surface(P, n, v.position[p], v.normal[p], tol)) continue;
+          sum += std::clamp(e[p], 0.f, 1.f);
+          w += 1.f;
+        }
+      out[k] = sum / w;  // w >= 1: the texel's own pixel passes its own test
+    }
+  });
   return out;
 }
 

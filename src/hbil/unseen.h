@@ -78,10 +78,11 @@ std::vector<Vec3> unseen_fill_map(const ViewGBuffer& sv, const EscapeProfile& pr
 // Background pixels 0. The same for any thread count.
 std::vector<Vec3> escape_fill_map(const ViewGBuffer& sv, const std::vector<float>& escape,
                                   const std::vector<float>& reach, const Vec3& fill);
-// The escape pass `e` (one value per pixel of v, the full-resolution view) at the pixels of
-// sv = reduce_view(v, f) (f = 1: sv is v): the mean of e over each texel's f x f block of v,
-// over the pixels on the texel's own surface (reduce_radiance's test), which also averages
-// the noise of a render made with few samples.
+// The escape pass `e` (one value per pixel of v, the full-resolution view, clamped to [0, 1])
+// at the pixels of sv = reduce_view(v, f) (f = 1: sv is v): the mean of e over the pixels of v
+// within r = max(kEscapeRadius, f / 2) of each texel's own pixel, on its surface (the
+// spatial filter's test), so that a pass rendered with one sample per pixel will do.
+constexpr int kEscapeRadius = 2;
 std::vector<float> escape_at_view(const ViewGBuffer& v, const ViewGBuffer& sv, int f,
                                   const std::vector<float>& e, float depth_tolerance);
 
