@@ -170,6 +170,56 @@ TEST(Unseen, TheFillMapDimsTheFillByTheEscape) {
   EXPECT_NEAR(mf[ground].y, 0.375f * 0.375f * fill.y, 2e-3);
 }
 
+// The escape pass at the searched pixels: a noisy 1-spp pass (0 or 1 per pixel) averages over
+// each pixel's surface within kEscapeRadius, never across to another surface; the fill map
+// gives the blocked share of the empty directions, 1 − e / a, and nothing where a <= e.
+TEST(Unseen, TheEscapePassIsAveragedOverItsSurfaceAndDimsTheFill) {
+  Frame f = frame(40, 20, 0);
+  const int w = f.v.width, h = f.v.height;
+  std::vector<float> e(f.v.pixels());
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const size_t i = size_t(y) * w + x;
+      if (x >= w / 2) {  // the right half: a second surface, twice as far, escaping everywhere
+        f.v.position[i] = Vec3(f.cam.unproject(x + 0.5, y + 0.5, 4.0));
+        e[i] = 1.f;
+      } else {
+        e[i] = float((x + y) % 2);  // a checkerboard of 0 and 1
+      }
+    }
+  const std::vector<float> m = escape_at_view(f.v, f.v, 1, e, 0.05f);
+  ASSERT_EQ(m.size(), f.v.pixels());
+  const int r = kEscapeRadius, n = (2 * r + 1) * (2 * r + 1);  // a full window: 25 pixels
+  for (int y = r; y < h - r; ++y)
+    for (int x = r; x < w / 2 - r; ++x) {               // windows on the left surface alone
+      const float ones = float(n / 2 + ((x + y) % 2));  // 12 or 13 ones among the 25
+      EXPECT_FLOAT_EQ(m[size_t(y) * w + x], ones / float(n)) << x << " " << y;
+    }
+  for (int y = 0; y < h; ++y)  // the far surface's pixels see none of the near one's zeros
+    EXPECT_EQ(m[size_t(y) * w + w / 2], 1.f) << y;
+  // Reduced (f = 2): texel (i, j) is pixel (2i, 2j); the window is still 2 pixels.
+  const ViewGBuffer lo = [&] {
+    ViewGBuffer v;
+    v.width = w / 2, v.height = h / 2;
+    for (int j = 0; j < v.height; ++j)
+      for (int i = 0; i < v.width; ++i) {
+        v.position.push_back(f.v.position[size_t(2 * j) * w + 2 * i]);
+        v.normal.push_back(f.v.normal[size_t(2 * j) * w + 2 * i]);
+      }
+    return v;
+  }();
+  const std::vector<float> ml = escape_at_view(f.v, lo, 2, e, 0.05f);
+  EXPECT_FLOAT_EQ(ml[size_t(4) * lo.width + 4], m[size_t(8) * w + 8]);
+  // The fill: e = 0.2 of the hemisphere escapes, the search leaves a open.
+  const Vec3 fill{0.2f, 0.4f, 0.8f};
+  const std::vector<float> esc(f.v.pixels(), 0.2f);
+  std::vector<float> reach(f.v.pixels(), 0.8f);
+  reach[1] = 0.1f;  // the search leaves less open than escapes: noise, no fill
+  const std::vector<Vec3> fm = escape_fill_map(f.v, esc, reach, fill);
+  EXPECT_FLOAT_EQ(fm[0].z, 0.75f * fill.z);  // 1 − 0.2 / 0.8
+  EXPECT_EQ(fm[1].z, 0.f);
+}
+
 // Nothing the model is given ends outside its tables: a NaN normal reads as facing down in
 // the table and as a wall at the frame's edges, a camera with no focal length counts nothing.
 TEST(Unseen, NonFiniteInputsStayInTheTables) {
