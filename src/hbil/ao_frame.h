@@ -70,7 +70,7 @@ Params resolve_frame_outputs(const GBuffer& g, const Params& requested);
 //  - with an escape pass (GBuffer::escape, which says which directions a surface blocks, so
 //    that only those get the fill), 0.8 as well: of 0.6, 0.8, 1.0 and 1.2, the largest that
 //    lowers the composite of none of the ten scenes of the README's unseen table (1.0 gains
-//    0.8-2.5 dB more on nine of them and loses 2.5 dB on the study's camera move);
+//    0.35-1.46 dB more on eight of them and loses 2.0-2.5 dB on the other two);
 //  - where the elevations the frame does not show escape (the default), 1.2: fewer
 //    directions get the fill there, and each needs more of it. Of 0.8, 1.2 and 1.6, the
 //    largest that lowers the composite of no scene of the README's unseen table but the
