@@ -187,7 +187,8 @@ std::vector<float> escape_at_view(const ViewGBuffer& v, const ViewGBuffer& sv, i
           sum += std::clamp(e[p], 0.f, 1.f);
           w += 1.f;
         }
-      out[k] = sum / w;  // w >= 1: the texel's own pixel passes its own test
+      // The texel's own pixel passes its own test unless its normal is degenerate (zero).
+      out[k] = w > 0 ? sum / w : std::clamp(e[size_t(cy) * v.width + cx], 0.f, 1.f);
     }
   });
   return out;
