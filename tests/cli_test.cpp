@@ -1077,6 +1077,11 @@ TEST_F(Cli, InfoListsPassesCameraAndOutputs) {
   ASSERT_GT(geometry, 0u);
   const double mean = sum / double(geometry);
   EXPECT_NEAR(red, 0.8 * mean, 1e-3 * mean) << interior.out;
+  // The escape pass is off by default; the sample's AO pass (1 m) is pointed out as one.
+  EXPECT_TRUE(contains(interior.out,
+                       "escape: off (passes.escape is \"\"); the frame has an AO "
+                       "pass"))
+      << interior.out;
 
   // Without Normal (and without a sidecar): the outputs cannot be computed and info says
   // why, exit 0 all the same; the camera is solved from Position.

@@ -1,4 +1,5 @@
 // info.cpp: `hbil info FILE`: what a frame holds and what hbil can compute from it.
+#include <algorithm>
 #include <iostream>
 #include <map>
 
@@ -53,12 +54,21 @@ void info(const std::string& path, const ParamOptions& po) {
   std::cout << "G-buffer fields:\n";
   for (const auto& field : gbuffer_fields()) {
     std::cout << "  " << field << ": ";
-    if (f.has(field))
+    if (f.has(field)) {
       std::cout << join(f.wanted.at(field)) << "\n";
-    else
-      std::cout << "absent (looked for "
-                << join(f.wanted.count(field) ? f.wanted.at(field) : std::vector<std::string>{})
-                << ")\n";
+    } else if (!f.wanted.count(field)) {  // switched off: an empty pass name
+      std::cout << "off (passes." << field << " is \"\")";
+      // The AO pass is what escapes the scene when rendered with a distance beyond it.
+      const bool ao = std::any_of(f.spec.channelnames.begin(), f.spec.channelnames.end(),
+                                  [](const std::string& c) { return c.ends_with(".AO.R"); });
+      if (field == "escape" && ao)
+        std::cout << "; the frame has an AO pass: if World > Ambient Occlusion > Distance "
+                     "exceeds the scene, --set passes.escape=AO lights unseen_radiance \"auto\" "
+                     "by it";
+      std::cout << "\n";
+    } else {
+      std::cout << "absent (looked for " << join(f.wanted.at(field)) << ")\n";
+    }
   }
 
   // The pixels `run` would read, read and checked as run does: a frame whose data cannot be

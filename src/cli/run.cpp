@@ -88,12 +88,16 @@ void run_frames(const RunOptions& o, io::RunLog& log, int& written) {
                 << job.why_dropped() << "\n";
     if (!job.scene_description().empty())
       std::cerr << "hbil: auto: " << job.scene_description() << "\n";
-    if (p.unseen_radiance_auto && gathers(p) && first.has("escape") && p.radiance_cache == 0)
+    if (p.unseen_radiance_auto && gathers(p) && first.has("escape"))
       std::cerr << "hbil: unseen_radiance auto: per frame, " << auto_unseen_factor(true)
                 << " x the mean DiffCol x DiffDir + Emit of its geometry, in the directions the"
                    " search finds empty, times the share of them that a surface blocks by "
                 << first.spec.channelnames[first.channels.at("escape")[0]]
-                << " (passes.escape: what escapes the whole scene)\n";
+                << " (passes.escape: what escapes the whole scene)"
+                << (p.radiance_cache > 0
+                        ? "; on the frames whose radiance cache has entries, the cache's fill"
+                        : "")
+                << "\n";
     else if (p.unseen_radiance_auto && gathers(p))
       std::cerr << "hbil: unseen_radiance auto: per frame, " << auto_unseen_factor(p.unseen_carry)
                 << " x the mean DiffCol x DiffDir + Emit of its geometry, times 1 - what its"
