@@ -74,6 +74,22 @@ TEST(ReducedSearch, RadianceBlockMeanStaysOnItsSurface) {
   EXPECT_FLOAT_EQ(r[2].y, 1.f);
 }
 
+TEST(ReducedSearch, ADegenerateNormalKeepsItsOwnPixelsRadiance) {
+  // A texel whose normal is zero (or NaN) fails even its own pixel's same-surface test: it
+  // takes its own pixel's radiance, not 0 / 0.
+  ViewGBuffer v = two_planes(8, 2, 5);
+  v.normal[2] = Vec3{0, 0, 0};
+  v.normal[6] = Vec3{std::nanf(""), 0, 0};
+  std::vector<Vec3> L(v.pixels());
+  for (size_t i = 0; i < L.size(); ++i) L[i] = Vec3{float(i % 8), 1, 0};
+  const ViewGBuffer lo = reduce_view(v, 2);
+  const std::vector<Vec3> r = reduce_radiance(v, lo, 2, L, 0.05f);
+  EXPECT_EQ(r[1].x, 2.f);
+  EXPECT_EQ(r[3].x, 6.f);
+  EXPECT_FLOAT_EQ(r[0].x, 0.5f);  // the others as before
+  for (const Vec3& x : r) EXPECT_TRUE(std::isfinite(x.x) && std::isfinite(x.y)) << x.x;
+}
+
 TEST(ReducedSearch, UpsampleNeverMixesSurfaces) {
   // Texel values: 0.25 on the near plane, 0.75 on the far one. Every full-resolution pixel
   // must get exactly its own plane's value, also at the edge (x = 9 is far, texel 4 = pixel 8

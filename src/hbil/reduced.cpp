@@ -52,18 +52,11 @@ std::vector<Vec3> reduce_radiance(const ViewGBuffer& v, const ViewGBuffer& lo, i
     for (int i = 0; i < lo.width; ++i) {
       const size_t k = size_t(j) * lo.width + i;
       if (lo.is_background(k)) continue;
-      const Vec3 &P = lo.position[k], &n = lo.normal[k];
-      const float tol = depth_tolerance * P.z;
-      Vec3 sum;
-      float w = 0;
-      for (int y = f * j; y < std::min(f * j + f, v.height); ++y)
-        for (int x = f * i; x < std::min(f * i + f, v.width); ++x) {
-          const size_t p = size_t(y) * v.width + x;
-          if (v.is_background(p) || !same_surface(P, n, v.position[p], v.normal[p], tol)) continue;
-          sum += L[p];
-          w += 1.f;
-        }
-      out[k] = sum / w;  // w >= 1: the texel's own pixel passes its own test
+      // The texel's f x f block; its own pixel (the block's first) where nothing passes.
+      const size_t own = size_t(f * j) * v.width + f * i;
+      out[k] = surface_mean(
+          v, f * i, f * j, f * i + f - 1, f * j + f - 1, lo.position[k], lo.normal[k],
+          depth_tolerance * lo.position[k].z, [&](size_t p) { return L[p]; }, L[own]);
     }
   });
   return out;

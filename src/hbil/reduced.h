@@ -41,7 +41,8 @@ std::string describe_search(const Params& p, int width, int height);
 // Every f-th pixel of every f-th row of v (f >= 1), with scale = v.scale * f.
 ViewGBuffer reduce_view(const ViewGBuffer& v, int f);
 // The source radiance of each texel of `lo` (from reduce_view(v, f)): the mean of L over the
-// pixels of its f x f block of v on the texel's surface.
+// pixels of its f x f block of v on the texel's surface (surface_mean; its own pixel's where
+// none is, as with a degenerate normal).
 std::vector<Vec3> reduce_radiance(const ViewGBuffer& v, const ViewGBuffer& lo, int f,
                                   const std::vector<Vec3>& L, float depth_tolerance);
 // The search result `h` on `lo` brought to v's resolution (background pixels keep the

@@ -10,6 +10,7 @@
 // normal is within acos(0.8) ~ 37 degrees of the centre's. Weights are 0 or 1.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 
 #include "hbil/gbuffer.h"
@@ -22,6 +23,25 @@ namespace hbil {
 // acos(0.8) of n.
 inline bool same_surface(const Vec3& P, const Vec3& n, const Vec3& Q, const Vec3& m, float tol) {
   return std::fabs(dot(Q - P, n)) <= tol && dot(m, n) >= 0.8f;
+}
+
+// The mean of value(p) over the pixels p of v in the window [x0, x1] x [y0, y1] (clipped
+// to v) that lie on the surface (P, n) of `tol` (same_surface), each with weight 1; `own`
+// where none does (a degenerate normal fails even its own pixel's test). For the reduced
+// search's radiance (reduced.h) and the escape pass (unseen.h).
+template <class T, class Value>
+T surface_mean(const ViewGBuffer& v, int x0, int y0, int x1, int y1, const Vec3& P, const Vec3& n,
+               float tol, Value value, T own) {
+  T sum{};
+  float w = 0;
+  for (int y = std::max(0, y0); y <= std::min(v.height - 1, y1); ++y)
+    for (int x = std::max(0, x0); x <= std::min(v.width - 1, x1); ++x) {
+      const size_t p = size_t(y) * v.width + x;
+      if (v.is_background(p) || !same_surface(P, n, v.position[p], v.normal[p], tol)) continue;
+      sum += value(p);
+      w += 1.f;
+    }
+  return w > 0 ? sum / w : own;
 }
 
 // `vectorised`: the pixels whose windows lie inside the columns run one per SIMD lane

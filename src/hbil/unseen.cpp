@@ -176,19 +176,10 @@ std::vector<float> escape_at_view(const ViewGBuffer& v, const ViewGBuffer& sv, i
     for (int i = 0; i < sv.width; ++i) {
       const size_t k = size_t(j) * sv.width + i;
       if (sv.is_background(k)) continue;
-      const Vec3 &P = sv.position[k], &n = sv.normal[k];
-      const float tol = depth_tolerance * P.z;
       const int cx = f * i, cy = f * j;  // the texel's own pixel of v
-      float sum = 0, w = 0;
-      for (int y = std::max(0, cy - r); y <= std::min(v.height - 1, cy + r); ++y)
-        for (int x = std::max(0, cx - r); x <= std::min(v.width - 1, cx + r); ++x) {
-          const size_t p = size_t(y) * v.width + x;
-          if (v.is_background(p) || !same_surface(P, n, v.position[p], v.normal[p], tol)) continue;
-          sum += std::clamp(e[p], 0.f, 1.f);
-          w += 1.f;
-        }
-      // The texel's own pixel passes its own test unless its normal is degenerate (zero).
-      out[k] = w > 0 ? sum / w : std::clamp(e[size_t(cy) * v.width + cx], 0.f, 1.f);
+      auto at = [&](size_t p) { return std::clamp(e[p], 0.f, 1.f); };
+      out[k] = surface_mean(v, cx - r, cy - r, cx + r, cy + r, sv.position[k], sv.normal[k],
+                            depth_tolerance * sv.position[k].z, at, at(size_t(cy) * v.width + cx));
     }
   });
   return out;
