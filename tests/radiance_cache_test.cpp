@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <numbers>
 
 #include "analytic_scenes.h"
@@ -162,43 +163,101 @@ TEST(RadianceCache, SkyIsKnownDarkness) {
   EXPECT_NEAR(f.x, RadianceCache::kEpsilon / (1 + RadianceCache::kEpsilon), 0.01);
 }
 
-// The groove of temporal_test.cpp, seen by a camera turned `yaw` degrees.
+// A fallback per pixel (the escape pass's fill) enters as a constant one does, each pixel's
+// own times the unknown share of its normal; what the cache knows stays.
+TEST(RadianceCache, APerPixelFallbackFillsOnlyTheUnknownShareOfItsPixel) {
+  RadianceCache cache(8);
+  add_face(cache, {0, -1, 0}, 3, 2.f);  // behind the reader (which looks along +y): known
+  const Camera cam = reader();
+  ViewGBuffer v;
+  v.width = 3, v.height = 1;
+  v.position.assign(3, Vec3{0, 0, 5});
+  v.normal = {Vec3{0, 0, -1}, Vec3{1, 0, 0}, Vec3{0, -1, 0}};  // towards the camera, right, up
+  for (const Vec3 fb : {Vec3{}, Vec3{0.5f, 1.f, 2.f}}) {
+    const std::vector<Vec3> constant = cache.fill_map(v, cam, 4, fb);
+    const std::vector<Vec3> per_pixel = cache.fill_map(v, cam, 4, std::vector<Vec3>(3, fb));
+    for (size_t i = 0; i < 3; ++i) {
+      EXPECT_NEAR(per_pixel[i].x, constant[i].x, 1e-6 * (1 + constant[i].x)) << i;
+      EXPECT_NEAR(per_pixel[i].z, constant[i].z, 1e-6 * (1 + constant[i].z)) << i;
+    }
+  }
+  const std::vector<Vec3> zero = cache.fill_map(v, cam, 4, Vec3{});
+  const std::vector<Vec3> one = cache.fill_map(v, cam, 4, Vec3{1, 1, 1});
+  std::vector<Vec3> fb(3);
+  fb[1] = Vec3{1, 1, 1};
+  const std::vector<Vec3> mixed = cache.fill_map(v, cam, 4, fb);
+  EXPECT_NEAR(mixed[0].x, zero[0].x, 1e-6);
+  EXPECT_NEAR(mixed[1].x, one[1].x, 1e-6);
+  EXPECT_NEAR(mixed[2].x, zero[2].x, 1e-6);
+  // The normal towards the camera sees the known face behind it; the upward one less of it,
+  // and more of the unknown.
+  EXPECT_GT(zero[0].x, 0.5f);
+  EXPECT_GT(one[2].x - zero[2].x, one[0].x - zero[0].x);
+}
+
+// The groove of temporal_test.cpp, seen by a camera turned `yaw` degrees; with `escape`, an
+// escape pass (GBuffer::escape) of 0.3 over every pixel.
 struct Scene {
   Camera cam;
   GBuffer g;
 };
-Scene groove(double yaw_deg) {
+Scene groove(double yaw_deg, bool escape = false) {
   Scene s;
   s.g = test::lit_groove(s.cam, yaw_deg, 96, 96, 70);
+  if (escape) s.g.escape.assign(s.g.pixels(), 0.3f);
   return s;
 }
-std::vector<AoFrame> run(const Params& p, double yaw_per_frame, int frames) {
+std::vector<AoFrame> run(const Params& p, double yaw_per_frame, int frames, bool escape = false) {
   TemporalChain chain(p);
   std::vector<AoFrame> out;
   for (int f = 1; f <= frames; ++f) {
-    const Scene s = groove(yaw_per_frame * (f - 1));
+    const Scene s = groove(yaw_per_frame * (f - 1), escape);
     out.push_back(chain.process(s.g, s.cam, f, false));
   }
   return out;
 }
 
 TEST(RadianceCache, AStaticCameraComputesWhatItDoesWithoutTheCache) {
-  for (bool vectorised : {true, false}) {
-    Params p;
-    p.outputs = {"ao", "irradiance"};
-    p.unseen_radiance_auto = false;
-    p.unseen_radiance = 0.5;  // the fallback, through the marches' fill and the replay
-    p.bounces = 2;
-    p.vectorised = vectorised;
-    const std::vector<AoFrame> plain = run(p, 0, 4);
-    p.radiance_cache = 8;
-    const std::vector<AoFrame> cached = run(p, 0, 4);
-    for (size_t f = 0; f < plain.size(); ++f) {
-      SCOPED_TRACE(std::to_string(f) + (vectorised ? " simd" : " scalar"));
-      test::expect_same_bytes(plain[f].irradiance, cached[f].irradiance, "irradiance");
-      test::expect_same_bytes(plain[f].ao, cached[f].ao, "ao");
+  // With a constant fallback (through the marches' fill and the replay) and with "auto",
+  // whose fill differs per normal.
+  for (bool automatic : {false, true})
+    for (bool vectorised : {true, false}) {
+      Params p;
+      p.outputs = {"ao", "irradiance"};
+      p.unseen_radiance_auto = automatic;
+      p.unseen_radiance = 0.5;
+      p.bounces = 2;
+      p.vectorised = vectorised;
+      const std::vector<AoFrame> plain = run(p, 0, 4);
+      p.radiance_cache = 8;
+      const std::vector<AoFrame> cached = run(p, 0, 4);
+      for (size_t f = 0; f < plain.size(); ++f) {
+        SCOPED_TRACE(std::to_string(f) + (vectorised ? " simd" : " scalar") +
+                     (automatic ? " auto" : " 0.5"));
+        test::expect_same_bytes(plain[f].irradiance, cached[f].irradiance, "irradiance");
+        test::expect_same_bytes(plain[f].ao, cached[f].ao, "ao");
+      }
     }
+}
+
+// With the escape pass, where the cache knows nothing (a static camera: nothing off screen)
+// each pixel keeps the pass's fill: the same bytes as without the cache.
+TEST(RadianceCache, WithTheEscapePassAStaticCameraKeepsThePassesFill) {
+  Params p;
+  p.outputs = {"ao", "irradiance"};
+  const std::vector<AoFrame> plain = run(p, 0, 4, true);
+  p.radiance_cache = 8;
+  const std::vector<AoFrame> cached = run(p, 0, 4, true);
+  for (size_t f = 0; f < plain.size(); ++f) {
+    SCOPED_TRACE(f);
+    test::expect_same_bytes(plain[f].irradiance, cached[f].irradiance, "irradiance");
   }
+  // The pass is used: without it, the frames differ.
+  p.radiance_cache = 0;
+  const std::vector<AoFrame> without = run(p, 0, 2, false);
+  EXPECT_NE(std::memcmp(without[1].irradiance.data(), plain[1].irradiance.data(),
+                        plain[1].irradiance.size() * sizeof(Vec3)),
+            0);
 }
 
 TEST(RadianceCache, APlaneAloneReceivesTheFillOfItsNormal) {

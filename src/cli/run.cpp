@@ -94,8 +94,9 @@ void run_frames(const RunOptions& o, io::RunLog& log, int& written) {
                    " search finds empty, times the share of them that a surface blocks by "
                 << first.spec.channelnames[first.channels.at("escape")[0]]
                 << " (passes.escape: what escapes the whole scene)"
-                << (p.radiance_cache > 0
-                        ? "; on the frames whose radiance cache has entries, the cache's fill"
+                << (p.radiance_cache > 0 || !p.panorama.empty()
+                        ? "; where a radiance cache or a panorama knows what lies off screen, "
+                          "what it shows"
                         : "")
                 << "\n";
     else if (p.unseen_radiance_auto && gathers(p))

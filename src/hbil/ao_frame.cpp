@@ -144,15 +144,16 @@ HorizonImage search_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& 
   HorizonImage h;
   // unseen_radiance "auto": a fraction of the frame's mean direct outgoing radiance, times
   // what does not escape over each pixel's hemisphere (unseen.h), the same for every bounce.
-  // With the radiance cache, its fill per searched pixel, with unseen_radiance (one
-  // radiance: for "auto", the fill of a level normal) where it knows nothing.
+  // With the radiance cache, its fill per searched pixel, with unseen_radiance where it knows
+  // nothing: with "auto" each pixel's own fill (so that it changes only what it knows), but
+  // for a panorama without the escape pass one radiance, the fill of a level normal.
   const bool cached = gather && in.cache && !in.cache->empty();
   // unseen_scale multiplies either (the fill's level; calibration solves it per shot).
   const float u = float(p.unseen_radiance * p.unseen_scale);
   std::vector<Vec3> fill_map;
   if (gather) c.fill = Vec3{u, u, u};
   if (gather && p.unseen_radiance_auto) {
-    const bool escape_pass = !cached && !g.escape.empty();
+    const bool escape_pass = !g.escape.empty();
     c.fill = mean_direct_radiance(v, g) *
              (auto_unseen_factor(p.unseen_carry || escape_pass) * float(p.unseen_scale));
     if (escape_pass) {
@@ -162,7 +163,8 @@ HorizonImage search_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& 
       c.fill_map = fill_map.data();
     } else {
       const EscapeProfile escape = escape_profile(v, cam, p.unseen_carry);
-      if (cached) {
+      if (cached && in.cache->has_panorama(in.frame)) {
+        // A panorama's background is the sky it shows: without the pass, one radiance.
         c.fill = c.fill * (1.f - EscapeTable(escape).at(Vec3{0, 0, -1}));
       } else {
         fill_map = unseen_fill_map(sv, escape, c.fill);
@@ -170,7 +172,10 @@ HorizonImage search_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& 
       }
     }
   }
-  if (cached) {
+  if (cached && !fill_map.empty()) {  // each pixel's own fill where the cache knows nothing
+    fill_map = in.cache->fill_map(sv, cam, in.frame, fill_map);
+    c.fill_map = fill_map.data();
+  } else if (cached) {
     fill_map = in.cache->fill_map(sv, cam, in.frame, c.fill);
     c.fill_map = fill_map.data();
   }

@@ -92,7 +92,7 @@ void RadianceCache::set_panorama(const GBuffer& pano, float background, int fram
     }
 }
 
-std::vector<Vec3> RadianceCache::fill_table(const Camera& cam, int frame, Vec3 fallback) const {
+RadianceCache::Sums RadianceCache::fill_sums(const Camera& cam, int frame) const {
   constexpr int W = kProbeWidth, H = kProbeHeight, n_tex = W * H;
   // 1. The probe: nearest distance per texel, then the mean of the entries within the band.
   // The frames' entries, then the panorama's.
@@ -157,8 +157,10 @@ std::vector<Vec3> RadianceCache::fill_table(const Camera& cam, int frame, Vec3 f
       t.L = count[i] > 0 ? sum[i] * (1.f / float(count[i])) : Vec3{};
     }
   }
-  // 2. The fill per normal.
-  std::vector<Vec3> table(size_t(kTableWidth) * kTableHeight);
+  // 2. The sums per normal.
+  const size_t n_table = size_t(kTableWidth) * kTableHeight;
+  Sums sums{std::vector<Vec3d>(n_table), std::vector<double>(n_table),
+            std::vector<double>(n_table)};
   const double eps = kEpsilon * kPi;
   tbb::parallel_for(0, kTableHeight, [&](int ny) {
     for (int nx = 0; nx < kTableWidth; ++nx) {
@@ -176,11 +178,21 @@ std::vector<Vec3> RadianceCache::fill_table(const Camera& cam, int frame, Vec3 f
         else
           unknown += w;
       }
-      const Vec3d fb(fallback);
-      table[size_t(ny) * kTableWidth + nx] =
-          Vec3((known + fb * (unknown + eps)) * (1.0 / (all + eps)));
+      const size_t k = size_t(ny) * kTableWidth + nx;
+      sums.known[k] = known;
+      sums.unknown[k] = unknown + eps;
+      sums.all[k] = all + eps;
     }
   });
+  return sums;
+}
+
+std::vector<Vec3> RadianceCache::fill_table(const Camera& cam, int frame, Vec3 fallback) const {
+  const Sums s = fill_sums(cam, frame);
+  std::vector<Vec3> table(s.known.size());
+  const Vec3d fb(fallback);
+  for (size_t k = 0; k < table.size(); ++k)
+    table[k] = Vec3((s.known[k] + fb * s.unknown[k]) * (1.0 / s.all[k]));
   return table;
 }
 
@@ -199,6 +211,28 @@ Vec3 RadianceCache::lookup(const std::vector<Vec3>& table, const Vec3& n) {
   const Vec3d r = (at(x0, y0) * (1 - au) + at(x0 + 1, y0) * au) * (1 - av) +
                   (at(x0, y0 + 1) * (1 - au) + at(x0 + 1, y0 + 1) * au) * av;
   return Vec3(r);
+}
+
+std::vector<Vec3> RadianceCache::fill_map(const ViewGBuffer& v, const Camera& cam, int frame,
+                                          const std::vector<Vec3>& fallback) const {
+  // Two tables: the known part, and the unknown share (the same in every channel).
+  const Sums s = fill_sums(cam, frame);
+  std::vector<Vec3> known(s.known.size()), unknown(s.known.size());
+  for (size_t k = 0; k < known.size(); ++k) {
+    known[k] = Vec3(s.known[k] * (1.0 / s.all[k]));
+    const float u = float(s.unknown[k] / s.all[k]);
+    unknown[k] = Vec3{u, u, u};
+  }
+  std::vector<Vec3> fill(v.pixels());
+  tbb::parallel_for(0, v.height, [&](int y) {
+    for (int x = 0; x < v.width; ++x) {
+      const size_t i = size_t(y) * v.width + x;
+      if (v.is_background(i)) continue;
+      const float u = lookup(unknown, v.normal[i]).x;
+      fill[i] = lookup(known, v.normal[i]) + fallback[i] * u;
+    }
+  });
+  return fill;
 }
 
 std::vector<Vec3> RadianceCache::fill_map(const ViewGBuffer& v, const Camera& cam, int frame,

@@ -33,7 +33,9 @@
 //     pixel's side, unknown texels taking the fallback (unseen_radiance); a normal that
 //     faces no off-screen direction takes the fallback.
 //  3. Each geometry pixel of the searched view takes F of its view-space normal (bilinear in
-//     the table); background pixels 0.
+//     the table); background pixels 0. With a fallback per pixel ("auto": each pixel's own
+//     fill, unseen.h) F is split into its known part and its unknown share, and each pixel
+//     takes the known part plus its own fallback times the unknown share.
 // The probe is taken at the camera centre, not at each pixel (a distant-light assumption
 // like the far field's), and visibility between pixel and cached surface is not tested: the
 // gather only asks in the directions where its own search found nothing.
@@ -44,7 +46,8 @@
 // panorama_ambient, for that frame alone. Unlike the frames' entries, its entries and texels
 // inside the frustum count too: it knows what lies beyond gather_radius there. Its
 // background is left unknown, so it takes the fallback (unseen_radiance; with "auto" the fill
-// of a level normal; 0 leaves the sky dark, its light being in DiffDir). Then the first frame
+// of a level normal, or with the escape pass each pixel's own; 0 leaves the sky dark, its
+// light being in DiffDir). Then the first frame
 // of a run and single frames have a fill too.
 //
 // With an empty cache (a run's first frame, the frame after a cut, single frames) and on a
@@ -87,6 +90,8 @@ class RadianceCache {
   // Drops the frames' entries (a cut); the panorama stays.
   void clear() { entries_.clear(); }
   size_t size() const { return entries_.size(); }
+  // Whether frame `frame` has a panorama (set_panorama).
+  bool has_panorama(int frame) const { return !panorama_.empty() && panorama_[0].frame == frame; }
   bool empty() const { return entries_.empty() && panorama_.empty(); }
 
   // Frame `frame`'s panorama (world-space positions, background at depth >= background):
@@ -108,6 +113,13 @@ class RadianceCache {
   // unseen_radiance of unknown directions. Deterministic for any thread count.
   std::vector<Vec3> fill_map(const ViewGBuffer& v, const Camera& cam, int frame,
                              Vec3 fallback) const;
+  // The same with a fallback per pixel of v (unseen_radiance "auto": each pixel's own fill,
+  // unseen.h, from the escape pass or the frame's escape profile): each pixel takes the
+  // table's known part, plus its own fallback times the table's unknown share. With a
+  // constant fallback this is fill_map's result, up to rounding; where nothing is known, the
+  // fallback itself, to the bit.
+  std::vector<Vec3> fill_map(const ViewGBuffer& v, const Camera& cam, int frame,
+                             const std::vector<Vec3>& fallback) const;
   // Step 2's table alone (kTableWidth x kTableHeight, rows from n.y = -1 (up) to +1),
   // for tests.
   std::vector<Vec3> fill_table(const Camera& cam, int frame, Vec3 fallback) const;
@@ -115,6 +127,14 @@ class RadianceCache {
   static Vec3 lookup(const std::vector<Vec3>& table, const Vec3& n);
 
  private:
+  // Step 2's sums per normal: the cosine-weighted known radiance (known), the weight of the
+  // unknown directions plus kEpsilon π (unknown), and the weight of all plus kEpsilon π (all).
+  struct Sums {
+    std::vector<Vec3d> known;
+    std::vector<double> unknown, all;
+  };
+  Sums fill_sums(const Camera& cam, int frame) const;
+
   int frames_;
   std::vector<Entry> entries_, panorama_;
 };
