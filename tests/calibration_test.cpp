@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <sstream>
 
 #include "hbil/ao_frame.h"
@@ -104,6 +105,55 @@ TEST(Calibration, TheFactorGivesTheRendersMean) {
   EXPECT_LT(f.scale, c[0].scale * 0.95);
   fed.feedback = false;  // a chain without feedback: the frame as it is
   EXPECT_EQ(Calibration(fed, shot, {1}).solve(fed, shot)[0].scale, c[0].scale);
+}
+
+// The solve searches its frame once and sums that search's record for its other levels and
+// the feedback (FrameInputs::record): each search equals a new one to the bit, with the
+// frame's own fill and with the escape pass's, with the record filled at another level.
+TEST(Calibration, ARecordedSearchEqualsANewOneAtEveryLevel) {
+  const io::FramePattern shot(kShot);
+  for (const char* escape : {"", "AO"}) {
+    SCOPED_TRACE(std::string("passes.escape \"") + escape + "\"");
+    Params p = resolved("");
+    p.passes["escape"] = escape;
+    p.search_scale = 1;
+    const io::InputFrame in = io::open_frame(shot.path(1), 1, p);
+    GBuffer g = io::read_fields(in, io::fields_needed(in, p), p);
+    ASSERT_EQ(g.escape.empty(), *escape == '\0');
+    const Camera cam = io::find_camera(in, g, p);
+    p = resolve_frame_outputs(g, p);
+    ASSERT_TRUE(gathers(p));
+    const ViewGBuffer v = make_view_gbuffer(g, cam, p);
+    auto search = [&](double s, const std::vector<Vec3>& feedback, GatherRecord* record) {
+      Params q = p;
+      q.unseen_scale = s;
+      FrameInputs fi;
+      fi.frame = 1;
+      fi.feedback = feedback;
+      fi.record = record;
+      return search_frame(v, g, cam, q, std::move(fi));
+    };
+    GatherRecord record;
+    const HorizonImage first = search(1.0, {}, &record);
+    ASSERT_TRUE(record.filled);
+    const HorizonImage fed = search(1.0, first.irradiance, nullptr);
+    const std::vector<Vec3> none;
+    for (double s : {0.0, 0.5, 1.0, 3.0}) {
+      SCOPED_TRACE("unseen_scale " + std::to_string(s));
+      for (const std::vector<Vec3>* feedback : {&none, &fed.irradiance}) {
+        const HorizonImage a = search(s, *feedback, nullptr), b = search(s, *feedback, &record);
+        ASSERT_EQ(a.irradiance.size(), b.irradiance.size());
+        EXPECT_EQ(std::memcmp(a.irradiance.data(), b.irradiance.data(),
+                              a.irradiance.size() * sizeof(Vec3)),
+                  0);
+        EXPECT_EQ(std::memcmp(a.ao.data(), b.ao.data(), a.ao.size() * sizeof(float)), 0);
+      }
+    }
+    // The fill reaches this frame: the levels differ.
+    EXPECT_NE(std::memcmp(search(0.0, {}, &record).irradiance.data(), first.irradiance.data(),
+                          first.irradiance.size() * sizeof(Vec3)),
+              0);
+  }
 }
 
 // The calibration computes on the pixel at the centre of every m x m block: its camera sees

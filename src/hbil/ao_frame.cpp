@@ -114,9 +114,13 @@ HorizonImage search_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& 
     frame_rotation(in.frame, p.interleave ? 16 * p.slices : p.slices, c.rotation, c.jitter_shift);
   const bool gather = gathers(p);
   // Later bounces sum the first one's recorded gather with their radiance instead of
-  // marching again (interleaved bitmask search; identical results).
+  // marching again (interleaved bitmask search; identical results), and so does every search
+  // with in.record once it is filled.
   GatherRecord record;
-  GatherRecord* reuse = gather && p.bounces > 1 ? &record : nullptr;
+  GatherRecord* reuse = !gather         ? nullptr
+                        : in.record     ? in.record
+                        : p.bounces > 1 ? &record
+                                        : nullptr;
   // A reduced search (search_scale > 1) marches every f-th pixel of every f-th row and its
   // result is upsampled to v (reduced.h).
   const int f = effective_search_scale(p, v.width, v.height);

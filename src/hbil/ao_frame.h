@@ -60,6 +60,11 @@ struct FrameInputs {
   // What earlier frames showed off screen (radiance_cache.h), or null: the gather's empty
   // directions see unseen_radiance alone.
   const RadianceCache* cache = nullptr;
+  // A record of this frame's gather (interleave.h, GatherRecord), or null: an empty one is
+  // filled by the first bounce, a filled one is summed instead of marching. Only for searches
+  // of the same view with the same parameters but for unseen_scale, the feedback and the
+  // bounce (calibration.cpp solves the fill's level with it); the bitmask method, interleaved.
+  GatherRecord* record = nullptr;
 };
 Params resolve_frame_outputs(const GBuffer& g, const Params& requested);
 // unseen_radiance "auto" = auto_unseen_factor(unseen_carry) x the mean over the frame's

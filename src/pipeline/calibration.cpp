@@ -67,6 +67,10 @@ CalibrationPoint solve_frame(const Params& p, const GBuffer& full, const Camera&
   // bounce (Params::feedback). The solve stands in for it by feeding the frame its own indirect
   // light once: the mean the run reaches after a few frames, not the one its first frame has.
   const bool fed = p.temporal && p.feedback;
+  // Every search of the solve is of the same view with the same parameters but for the fill's
+  // level and the feedback: the first marches and records its gather, the others sum the
+  // record with their own radiance and fill (the same results as marching again).
+  GatherRecord record;
   auto mean_at = [&](double s) {
     q.unseen_scale = s;
     HorizonImage h;
@@ -74,6 +78,7 @@ CalibrationPoint solve_frame(const Params& p, const GBuffer& full, const Camera&
       FrameInputs fi;
       fi.frame = c;
       fi.cache = pano ? &*pano : nullptr;
+      fi.record = &record;
       if (pass > 0) fi.feedback = std::move(h.irradiance);
       h = search_frame(v, g, cam, q, std::move(fi));
     }
@@ -81,8 +86,9 @@ CalibrationPoint solve_frame(const Params& p, const GBuffer& full, const Camera&
     return indirect_mean(v, g, h);
   };
   const double T = pt.reference;
-  pt.without = mean_at(0.0);
+  // The fill on first, so that the record holds the fill's share of every pixel.
   pt.with = mean_at(1.0);
+  pt.without = mean_at(0.0);
   double x0 = 0, f0 = pt.without - T, x1 = 1, f1 = pt.with - T;
   pt.reaches = pt.with - pt.without > 1e-6 * std::max(std::abs(pt.without), 1e-12);
   if (!pt.reaches) {
