@@ -24,6 +24,8 @@
 #include <string>
 #include <vector>
 
+#include "hbil/error.h"
+#include "io/layer_expr.h"
 #include "test_util.h"
 
 namespace hbil::io {
@@ -233,6 +235,65 @@ TEST(ExrDeflate, EveryFlippedByteIsAnErrorOrHarmless) {
   // header by OpenEXR's checks: only a few attributes can change unnoticed.
   EXPECT_GT(errors, int(bytes.size()) * 9 / 10)
       << declined << " declined, " << same << " unchanged";
+}
+
+// ImageFile (layer_expr.h), which `hbil compare`, `hbil bench` and `calibration` read files
+// with, takes this reader where it can: every layout gives OpenImageIO's own values, one
+// channel or a range, and a damaged file is an error naming it.
+TEST(ExrDeflate, ImageFileReadsEveryLayoutAsOpenImageIoDoes) {
+  TempDir dir{test::test_name()};
+  struct Case {
+    Imf::Compression compression;
+    int tile;
+    const char* name;
+  };
+  for (const Case& k :
+       {Case{Imf::ZIP_COMPRESSION, 0, "zip"}, Case{Imf::ZIPS_COMPRESSION, 0, "zips"},
+        Case{Imf::NO_COMPRESSION, 0, "none"}, Case{Imf::RLE_COMPRESSION, 0, "rle"},
+        Case{Imf::ZIP_COMPRESSION, 16, "tiled"}}) {
+    SCOPED_TRACE(k.name);
+    const std::string path = dir / (std::string(k.name) + ".exr");
+    write_file(path, k.compression, false, k.tile);
+    ImageFile f(path);
+    const int n = f.spec().nchannels;
+    ASSERT_EQ(n, int(kChannels.size()));
+    auto oiio = [&](int begin, int end) {
+      auto in = OIIO::ImageInput::open(path);
+      std::vector<float> v(kW * kH * size_t(end - begin));
+      EXPECT_TRUE(in && in->read_image(0, 0, begin, end, OIIO::TypeDesc::FLOAT, v.data()));
+      return v;
+    };
+    const std::vector<float> all = f.read_range(0, n), want = oiio(0, n);
+    ASSERT_EQ(all.size(), want.size());
+    EXPECT_EQ(0, std::memcmp(all.data(), want.data(), want.size() * sizeof(float)));
+    for (int c = 0; c < n; ++c) {
+      const std::vector<float> one = f.read(c), want_one = oiio(c, c + 1);
+      EXPECT_EQ(0, std::memcmp(one.data(), want_one.data(), want_one.size() * sizeof(float)))
+          << f.spec().channelnames[size_t(c)];
+    }
+    const std::vector<float> mid = f.read_range(1, 3), want_mid = oiio(1, 3);
+    EXPECT_EQ(0, std::memcmp(mid.data(), want_mid.data(), want_mid.size() * sizeof(float)));
+  }
+  // The last block damaged: an error that names the file.
+  const std::string path = dir / "zip.exr";
+  std::vector<char> bytes;
+  {
+    std::ifstream in(path, std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  bytes[bytes.size() - 2] ^= 0x5a;
+  {
+    std::ofstream out(path, std::ios::binary | std::ios::trunc);
+    out.write(bytes.data(), std::streamsize(bytes.size()));
+  }
+  ImageFile f(path);
+  try {
+    f.read_range(0, f.spec().nchannels);
+    FAIL() << "a damaged file was read without an error";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), Exit::input);
+    EXPECT_TRUE(test::contains(e.what(), path)) << e.what();
+  }
 }
 
 }  // namespace

@@ -1,12 +1,17 @@
 // layer_expr.cpp: see layer_expr.h.
 #include "io/layer_expr.h"
 
+#include <OpenEXR/ImfHeader.h>
+#include <OpenEXR/ImfInputFile.h>
+#include <OpenEXR/ImfThreading.h>
+
 #include <algorithm>
 #include <cctype>
 #include <functional>
 #include <string_view>
 
 #include "hbil/error.h"
+#include "io/exr_deflate.h"
 #include "io/header_size.h"
 
 namespace hbil::io {
@@ -18,8 +23,32 @@ ImageFile::ImageFile(std::string path) : path_(std::move(path)) {
   check_header_size(path_, spec_, std::string(in_->format_name()) == "openexr", path_);
 }
 
+bool ImageFile::read_deflate(int begin, int end, float* dst) const {
+  if (std::string(in_->format_name()) != "openexr") return false;
+  // OpenImageIO reads an integer channel as a fraction of its range, OpenEXR as its value.
+  for (int c = begin; c < end; ++c)
+    if (spec_.channelformat(c).basetype != OIIO::TypeDesc::HALF &&
+        spec_.channelformat(c).basetype != OIIO::TypeDesc::FLOAT)
+      return false;
+  try {
+    Imf::InputFile file(path_.c_str(), Imf::globalThreadCount());
+    const Imath::Box2i dw = file.header().dataWindow();
+    if (dw.min.x != spec_.x || dw.min.y != spec_.y || dw.max.x - dw.min.x + 1 != spec_.width ||
+        dw.max.y - dw.min.y + 1 != spec_.height)
+      return false;
+    const size_t n = size_t(end - begin);
+    std::vector<ExrChannelTarget> targets;
+    for (int c = begin; c < end; ++c)
+      targets.push_back({spec_.channelnames[size_t(c)], dst + (c - begin), n});
+    return read_deflate_scanlines(file, targets);
+  } catch (const std::exception&) {
+    return false;  // OpenImageIO reads it, or says why it cannot
+  }
+}
+
 std::vector<float> ImageFile::read(int c) {
   std::vector<float> v(size_t(spec_.width) * spec_.height);
+  if (read_deflate(c, c + 1, v.data())) return v;
   if (!in_->read_image(0, 0, c, c + 1, OIIO::TypeDesc::FLOAT, v.data()))
     throw Error(Exit::input,
                 path_ + ": cannot read channel " + spec_.channelnames[c] + ": " + in_->geterror());
@@ -28,6 +57,7 @@ std::vector<float> ImageFile::read(int c) {
 
 std::vector<float> ImageFile::read_range(int begin, int end) {
   std::vector<float> v(size_t(spec_.width) * spec_.height * size_t(end - begin));
+  if (read_deflate(begin, end, v.data())) return v;
   if (!in_->read_image(0, 0, begin, end, OIIO::TypeDesc::FLOAT, v.data()))
     throw Error(Exit::input, path_ + ": cannot read channels " + spec_.channelnames[begin] +
                                  " to " + spec_.channelnames[end - 1] + ": " + in_->geterror());

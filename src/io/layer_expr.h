@@ -45,7 +45,9 @@ class ChannelSource {
   virtual std::vector<float> read(int c) = 0;
 };
 
-// An image file read through OpenImageIO, one channel at a time.
+// An image file read through OpenImageIO, one channel at a time; a scanline EXR compressed
+// with ZIP, ZIPS or nothing through exr_deflate.h instead (the same values, several times
+// faster).
 class ImageFile : public ChannelSource {
  public:
   // Throws Error(Exit::input) naming the file.
@@ -63,6 +65,9 @@ class ImageFile : public ChannelSource {
   const OIIO::ImageSpec& spec() const { return spec_; }
 
  private:
+  // Channels [begin, end) interleaved into dst through exr_deflate.h; false (nothing read) where
+  // the file is not of its layout.
+  bool read_deflate(int begin, int end, float* dst) const;
   std::string path_;
   OIIO::ImageSpec spec_;
   std::unique_ptr<OIIO::ImageInput> in_;
