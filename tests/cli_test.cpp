@@ -486,10 +486,11 @@ TEST_F(Cli, MissingPassFailsWithoutOutput) {
 
 // A frame's own render stands in for its panorama (it has Position, DiffCol, DiffDir, Emit):
 // what it shows, also beyond the gather's reach, lights the empty directions, so indirect
-// light grows; a panorama without Position is a missing pass naming its file.
+// light grows (with no fill, unseen_radiance 0, so that only the panorama lights them); a
+// panorama without Position is a missing pass naming its file.
 TEST_F(Cli, PanoramaLightsTheEmptyDirectionsAndNeedsItsPasses) {
   copy_frame(1);
-  const std::string set = "--set 'outputs=[\"indirect\"]' --no-display ";
+  const std::string set = "--set 'outputs=[\"indirect\"]' --set unseen_radiance=0 --no-display ";
   ASSERT_EQ(hbil(run_args(in_frame(1), path("out/a.exr"), set)).code, 0);
   const RunResult r = hbil(run_args(in_frame(1), path("out/b.exr"),
                                     set + "--set panorama=" + q(path("in/frame_####.exr"))));

@@ -148,9 +148,9 @@ HorizonImage search_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& 
   HorizonImage h;
   // unseen_radiance "auto": a fraction of the frame's mean direct outgoing radiance, times
   // what does not escape over each pixel's hemisphere (unseen.h), the same for every bounce.
-  // With the radiance cache, its fill per searched pixel, with unseen_radiance where it knows
-  // nothing: with "auto" each pixel's own fill (so that it changes only what it knows), but
-  // for a panorama without the escape pass one radiance, the fill of a level normal.
+  // With the radiance cache or a panorama, its fill per searched pixel, with unseen_radiance
+  // where it knows nothing: with "auto" each pixel's own fill (so that it changes only what it
+  // knows).
   const bool cached = gather && in.cache && !in.cache->empty();
   // unseen_scale multiplies either (the fill's level; calibration solves it per shot).
   const float u = float(p.unseen_radiance * p.unseen_scale);
@@ -166,14 +166,8 @@ HorizonImage search_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& 
                                  search_reach(sv, c, p), c.fill);
       c.fill_map = fill_map.data();
     } else {
-      const EscapeProfile escape = escape_profile(v, cam, p.unseen_carry);
-      if (cached && in.cache->has_panorama(in.frame)) {
-        // A panorama's background is the sky it shows: without the pass, one radiance.
-        c.fill = c.fill * (1.f - EscapeTable(escape).at(Vec3{0, 0, -1}));
-      } else {
-        fill_map = unseen_fill_map(sv, escape, c.fill);
-        c.fill_map = fill_map.data();
-      }
+      fill_map = unseen_fill_map(sv, escape_profile(v, cam, p.unseen_carry), c.fill);
+      c.fill_map = fill_map.data();
     }
   }
   if (cached && !fill_map.empty()) {  // each pixel's own fill where the cache knows nothing

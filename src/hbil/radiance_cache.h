@@ -45,9 +45,9 @@
 // geometry pixels with their world position and DiffCol x (DiffDir + A) (+ Emit, as above), A its
 // panorama_ambient, for that frame alone. Unlike the frames' entries, its entries and texels
 // inside the frustum count too: it knows what lies beyond gather_radius there. Its
-// background is left unknown, so it takes the fallback (unseen_radiance; with "auto" the fill
-// of a level normal, or with the escape pass each pixel's own; 0 leaves the sky dark, its
-// light being in DiffDir). Then the first frame
+// background is left unknown, so it takes the fallback (unseen_radiance; with "auto" each
+// pixel's own fill, from the escape pass or the frame's escape profile; 0 leaves the sky dark,
+// its light being in DiffDir). Then the first frame
 // of a run and single frames have a fill too.
 //
 // With an empty cache (a run's first frame, the frame after a cut, single frames) and on a
@@ -91,7 +91,6 @@ class RadianceCache {
   void clear() { entries_.clear(); }
   size_t size() const { return entries_.size(); }
   // Whether frame `frame` has a panorama (set_panorama).
-  bool has_panorama(int frame) const { return !panorama_.empty() && panorama_[0].frame == frame; }
   bool empty() const { return entries_.empty() && panorama_.empty(); }
 
   // Frame `frame`'s panorama (world-space positions, background at depth >= background):
