@@ -90,7 +90,7 @@ class RadianceCache {
   // Drops the frames' entries (a cut); the panorama stays.
   void clear() { entries_.clear(); }
   size_t size() const { return entries_.size(); }
-  // Whether frame `frame` has a panorama (set_panorama).
+  // Whether it knows nothing: no frame's entries and no panorama.
   bool empty() const { return entries_.empty() && panorama_.empty(); }
 
   // Frame `frame`'s panorama (world-space positions, background at depth >= background):
