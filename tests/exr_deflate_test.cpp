@@ -170,21 +170,24 @@ TEST(ExrDeflate, DeclinesOtherLayoutsAndReadsNothing) {
   EXPECT_EQ(sink, -1.f);
 }
 
-TEST(ExrDeflate, DamagedBlockIsNamedByItsRows) {
-  TempDir dir{test::test_name()};
-  const std::string path = dir / "zip.exr";
-  write_file(path, Imf::ZIP_COMPRESSION, false);
-  // The file ends with the last block's zlib stream, whose last four bytes are its checksum.
+// Flips a byte of the last block's checksum: a ZIP file ends with that block's zlib stream,
+// whose last four bytes are its checksum.
+void damage_last_block(const std::string& path) {
   std::vector<char> bytes;
   {
     std::ifstream in(path, std::ios::binary);
     bytes.assign(std::istreambuf_iterator<char>(in), {});
   }
   bytes[bytes.size() - 2] ^= 0x5a;
-  {
-    std::ofstream out(path, std::ios::binary | std::ios::trunc);
-    out.write(bytes.data(), std::streamsize(bytes.size()));
-  }
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  out.write(bytes.data(), std::streamsize(bytes.size()));
+}
+
+TEST(ExrDeflate, DamagedBlockIsNamedByItsRows) {
+  TempDir dir{test::test_name()};
+  const std::string path = dir / "zip.exr";
+  write_file(path, Imf::ZIP_COMPRESSION, false);
+  damage_last_block(path);
   Imf::InputFile file(path.c_str());
   std::vector<float> sink(kW * kH);
   try {
@@ -276,16 +279,7 @@ TEST(ExrDeflate, ImageFileReadsEveryLayoutAsOpenImageIoDoes) {
   }
   // The last block damaged: an error that names the file.
   const std::string path = dir / "zip.exr";
-  std::vector<char> bytes;
-  {
-    std::ifstream in(path, std::ios::binary);
-    bytes.assign(std::istreambuf_iterator<char>(in), {});
-  }
-  bytes[bytes.size() - 2] ^= 0x5a;
-  {
-    std::ofstream out(path, std::ios::binary | std::ios::trunc);
-    out.write(bytes.data(), std::streamsize(bytes.size()));
-  }
+  damage_last_block(path);
   ImageFile f(path);
   try {
     f.read_range(0, f.spec().nchannels);
