@@ -115,6 +115,46 @@ BENCHMARK(BM_March)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
+// The recorded gather (interleave.h, GatherRecord), as the calibration's solve and the later
+// in-frame bounces use it: argument 0 marches with the gather and no record (BM_March's
+// gather row), 1 marches and records into an empty record, 2 replays a filled record (sums
+// it with the radiance, no march). Counter samples/s as BM_March's.
+void BM_Record(benchmark::State& state) {
+  const int mode = int(state.range(0));
+  Params p;
+  p.outputs = {"ao", "bentcone", "irradiance"};
+  const Frame& f = frame();
+  const ViewGBuffer v = make_view_gbuffer(f.g, f.cam, p);
+  const int n = effective_search_scale(p, v.width, v.height);
+  const ViewGBuffer lo = n > 1 ? reduce_view(v, n) : ViewGBuffer{};
+  const ViewGBuffer& sv = n > 1 ? lo : v;
+  const HorizonConfig c = make_horizon_config(p, f.cam);
+  const std::vector<Vec3> radiance(sv.pixels(), Vec3{0.5f, 0.5f, 0.5f});
+  GatherRecord filled;
+  if (mode == 2) horizon_interleaved(sv, c, p.slices, &radiance, true, &filled);
+  size_t entries = 0;
+  for (auto _ : state) {
+    GatherRecord fresh;
+    GatherRecord* r = mode == 0 ? nullptr : mode == 1 ? &fresh : &filled;
+    HorizonImage h = horizon_interleaved(sv, c, p.slices, &radiance, true, r);
+    benchmark::DoNotOptimize(h.irradiance.data());
+    entries = 0;
+    for (const GatherLog& row : (mode == 2 ? filled : fresh).rows) entries += row.entries.size();
+  }
+  const int per_side = p.steps + p.gather_steps;
+  state.counters["samples/s"] = benchmark::Counter(double(sv.pixels()) * p.slices * 2 * per_side,
+                                                   benchmark::Counter::kIsIterationInvariantRate);
+  state.counters["entries"] = double(entries);
+  state.SetLabel(std::to_string(sv.width) + "x" + std::to_string(sv.height) + " texels marched");
+}
+BENCHMARK(BM_Record)
+    ->ArgNames({"mode"})
+    ->Args({0})
+    ->Args({1})
+    ->Args({2})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
 // The view-space G-buffer of the frame (make_view_gbuffer, from its depth pass): argument 1
 // the SIMD rows, 0 the scalar loop (`vectorised`); the same buffer to the bit.
 void BM_ViewGBuffer(benchmark::State& state) {

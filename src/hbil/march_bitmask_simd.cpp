@@ -70,21 +70,41 @@ void MarchBitmaskRow(const SampleView& view, int i0, int j, int count, const flo
   HWY_ALIGN float lane_x[kMaxLanes], lane_y[kMaxLanes];
 
   if (!view.radiance) log = nullptr;
-  // The gather log, lane by lane until the lanes' pixels are appended in order.
-  std::vector<GatherEntry> lane_entries[kMaxLanes];
-  std::vector<std::uint16_t> lane_counts[kMaxLanes];
-  size_t slice_start[kMaxLanes] = {};
+  // The gather log, lane by lane until the lanes' pixels are appended in order: lane l's
+  // entries are lane_entries[l * cap, l * cap + lane_n[l]), its count of slice s
+  // lane_counts[l * n_slices + s]. A lane logs at most one entry a step and side and one
+  // fill a slice, so each lane's run has room for them all plus one: every lane's entry is
+  // written at its run's end and counted only where the lane logs (no branch per lane).
+  std::vector<GatherEntry> lane_entries;
+  std::vector<std::uint16_t> lane_counts(N * size_t(n_slices));
+  size_t cap = 0;
+  std::uint32_t lane_n[kMaxLanes] = {}, slice_start[kMaxLanes] = {};
   auto begin_slice = [&] {
-    for (size_t l = 0; l < N; ++l) slice_start[l] = lane_entries[l].size();
+    for (size_t l = 0; l < N; ++l) slice_start[l] = lane_n[l];
   };
-  auto end_slice = [&] {
+  auto end_slice = [&](int s) {
     for (size_t l = 0; l < N; ++l)
-      lane_counts[l].push_back(std::uint16_t(lane_entries[l].size() - slice_start[l]));
+      lane_counts[l * n_slices + s] = std::uint16_t(lane_n[l] - slice_start[l]);
+  };
+  // Appends {src, fw, w} to every lane of `logs`.
+  auto log_lanes = [&](const std::uint32_t* src, const float* fw, const float* w, MF logs) {
+    std::uint8_t bits[(kMaxLanes + 7) / 8 + 8] = {};
+    hn::StoreMaskBits(d, logs, bits);
+    GatherEntry* e = lane_entries.data();
+    for (size_t byte = 0; 8 * byte < N; ++byte)
+      for (unsigned b = bits[byte]; b != 0; b &= b - 1) {
+        const size_t l = 8 * byte + size_t(std::countr_zero(b));
+        e[l * cap + lane_n[l]++] = {src[l], fw[l], w[l]};
+      }
   };
   for (int base = 0; base < count; base += int(N)) {
-    for (size_t l = 0; l < N; ++l) lane_entries[l].clear(), lane_counts[l].clear();
     const PixelLanes px = LoadPixels(d, view, i0, j, base, count, c);
     if (hn::AllFalse(d, px.valid)) continue;
+    if (log) {
+      cap = size_t(n_slices) * (2 * size_t(px.n_steps) + 1) + 1;
+      if (lane_entries.size() < N * cap) lane_entries.resize(N * cap);
+      for (size_t l = 0; l < N; ++l) lane_n[l] = 0;
+    }
     const V3 &P = px.P, &wo = px.wo, &ray_P = px.ray_P;
     auto offset = [&](int q) { return StepOffset(d, px, c, fraction, q); };
 
@@ -95,7 +115,7 @@ void MarchBitmaskRow(const SampleView& view, int i0, int j, int count, const flo
       const MF live = L.live;
       if (log) begin_slice();
       if (hn::AllFalse(d, live)) {
-        if (log) end_slice();
+        if (log) end_slice(s);
         continue;
       }
       const V3& D = L.D;
@@ -229,15 +249,12 @@ void MarchBitmaskRow(const SampleView& view, int i0, int j, int count, const flo
           const V3 add = Scale(Scale(L, fw), w);
           irradiance = Select(any_fresh, Add3(irradiance, add), irradiance);
           if (log) {
-            HWY_ALIGN std::int32_t k_lane[kMaxLanes];
-            HWY_ALIGN float fw_lane[kMaxLanes], w_lane[kMaxLanes], fresh_lane[kMaxLanes];
-            hn::Store(k_s, di, k_lane);
+            HWY_ALIGN std::uint32_t k_lane[kMaxLanes];
+            HWY_ALIGN float fw_lane[kMaxLanes], w_lane[kMaxLanes];
+            hn::Store(hn::BitCast(du, k_s), du, k_lane);
             hn::Store(fw, d, fw_lane);
             hn::Store(w, d, w_lane);
-            hn::Store(hn::IfThenElseZero(any_fresh, one), d, fresh_lane);
-            for (size_t l = 0; l < N; ++l)
-              if (fresh_lane[l] != 0.f)
-                lane_entries[l].push_back({std::uint32_t(k_lane[l]), fw_lane[l], w_lane[l]});
+            log_lanes(k_lane, fw_lane, w_lane, any_fresh);
           }
         }
       }
@@ -253,12 +270,12 @@ void MarchBitmaskRow(const SampleView& view, int i0, int j, int count, const flo
         const V3 fill = view.fill ? Gather3(d, view.fill, px.own3) : fill_c;
         irradiance = Add3(irradiance, Scale(fill, w));
         if (log) {
-          HWY_ALIGN float w_lane[kMaxLanes], live_lane[kMaxLanes];
+          HWY_ALIGN std::uint32_t src_lane[kMaxLanes];
+          HWY_ALIGN float fw_lane[kMaxLanes], w_lane[kMaxLanes];
+          hn::Store(hn::Set(du, GatherEntry::kFillSource), du, src_lane);
+          hn::Store(one, d, fw_lane);
           hn::Store(w, d, w_lane);
-          hn::Store(hn::IfThenElseZero(live, one), d, live_lane);
-          for (size_t l = 0; l < N; ++l)
-            if (live_lane[l] != 0.f)
-              lane_entries[l].push_back({GatherEntry::kFillSource, 1.f, w_lane[l]});
+          log_lanes(src_lane, fw_lane, w_lane, live);
         }
       }
       // The unoccluded sectors, in order (march_bitmask.cpp).
@@ -275,12 +292,14 @@ void MarchBitmaskRow(const SampleView& view, int i0, int j, int count, const flo
         acc_b = Select(open, Add3(acc_b, Add3(Scale(D, dbx), Scale(wo, dby))), acc_b);
       }
       acc_e = Select(live, Add3(acc_e, irradiance), acc_e);
-      if (log) end_slice();
+      if (log) end_slice(s);
     }
     StoreSums(d, px.valid, base, count, acc_ao, acc_vis, acc_b, acc_e, out, [&](size_t l) {
       if (!log) return;
-      log->entries.insert(log->entries.end(), lane_entries[l].begin(), lane_entries[l].end());
-      log->counts.insert(log->counts.end(), lane_counts[l].begin(), lane_counts[l].end());
+      const GatherEntry* e = lane_entries.data() + l * cap;
+      log->entries.insert(log->entries.end(), e, e + lane_n[l]);
+      const std::uint16_t* n = lane_counts.data() + l * n_slices;
+      log->counts.insert(log->counts.end(), n, n + n_slices);
     });
   }
 }
