@@ -16,6 +16,7 @@
 #include <string>
 
 #include "analytic_scenes.h"
+#include "hbil/ao_frame.h"
 #include "hbil/interleave.h"
 #include "io/camera_io.h"
 #include "io/exr_frame.h"
@@ -235,6 +236,30 @@ TEST(GatherRecord, ReplayEqualsANewSearch) {
     for (size_t i = 0; i < g.pixels(); ++i)
       diff += std::fabs(a.irradiance[i].x - marched.irradiance[i].x);
     EXPECT_GT(diff, 1.0) << "the two radiances must give different light";
+  }
+}
+
+// Later in-frame bounces share the first one's occlusion: with 3 bounces the search gives the
+// ao, vis and bent of one bounce to the bit, and more light.
+TEST(GatherRecord, LaterBouncesKeepTheFirstOcclusion) {
+  Params p;
+  p.outputs = {"ao", "bentcone", "irradiance"};
+  const Sample s = room_poles_frame3(p);
+  for (bool vectorised : {true, false}) {
+    SCOPED_TRACE(vectorised ? "SIMD" : "scalar");
+    p.vectorised = vectorised;
+    p.bounces = 1;
+    const HorizonImage one = search_frame(s.v, s.g, s.cam, p, FrameInputs{});
+    p.bounces = 3;
+    const HorizonImage three = search_frame(s.v, s.g, s.cam, p, FrameInputs{});
+    ASSERT_EQ(three.ao.size(), one.ao.size());
+    EXPECT_EQ(std::memcmp(three.ao.data(), one.ao.data(), one.ao.size() * sizeof(float)), 0);
+    EXPECT_EQ(std::memcmp(three.vis.data(), one.vis.data(), one.vis.size() * sizeof(float)), 0);
+    EXPECT_EQ(std::memcmp(three.bent.data(), one.bent.data(), one.bent.size() * sizeof(Vec3)), 0);
+    double e1 = 0, e3 = 0;
+    for (size_t i = 0; i < one.irradiance.size(); ++i)
+      e1 += one.irradiance[i].y, e3 += three.irradiance[i].y;
+    EXPECT_GT(e3, 1.05 * e1) << "the later bounces add light";
   }
 }
 

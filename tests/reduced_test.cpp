@@ -7,7 +7,9 @@
 #include <gtest/gtest.h>
 #include <tbb/task_arena.h>
 
+#include <bit>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <numbers>
 
@@ -117,6 +119,41 @@ TEST(ReducedSearch, UpsampleNeverMixesSurfaces) {
       EXPECT_FLOAT_EQ(up.bent[p].z, -a);
       EXPECT_FLOAT_EQ(up.irradiance[p].y, a);
     }
+}
+
+TEST(ReducedSearch, TheIrradianceAloneIsUpsampledToTheSameBits) {
+  // A later in-frame bounce upsamples its irradiance alone: the same values as the whole
+  // result's, on rough surfaces where some pixels fall back to their nearest texel.
+  ViewGBuffer v = two_planes(23, 11, 9);
+  for (size_t p = 0; p < v.pixels(); ++p) v.position[p].z += 0.01f * float((p * 7) % 5);
+  const ViewGBuffer lo = reduce_view(v, 2);
+  HorizonImage h;
+  h.width = lo.width;
+  h.height = lo.height;
+  for (size_t k = 0; k < lo.pixels(); ++k) {
+    const float a = 0.03f * float(k % 13);
+    h.ao.push_back(a);
+    h.vis.push_back(a);
+    h.bent.push_back(Vec3{0, 0, -a});
+    h.irradiance.push_back(Vec3{a, 2 * a, 0.5f - a});
+  }
+  const HorizonImage whole = upsample_horizon(v, lo, 2, h, 0.05f);
+  HorizonImage alone;
+  alone.width = h.width;
+  alone.height = h.height;
+  alone.irradiance = h.irradiance;
+  const HorizonImage up = upsample_horizon(v, lo, 2, alone, 0.05f);
+  EXPECT_TRUE(up.ao.empty() && up.vis.empty() && up.bent.empty());
+  ASSERT_EQ(up.irradiance.size(), v.pixels());
+  size_t lit = 0;
+  for (size_t p = 0; p < v.pixels(); ++p) {
+    for (int c = 0; c < 3; ++c)
+      ASSERT_EQ(std::bit_cast<std::uint32_t>((&up.irradiance[p].x)[c]),
+                std::bit_cast<std::uint32_t>((&whole.irradiance[p].x)[c]))
+          << p;
+    lit += up.irradiance[p].y > 0.f;
+  }
+  EXPECT_GT(lit, v.pixels() / 2);
 }
 
 TEST(ReducedSearch, UpsampleOfASmoothFieldIsBilinear) {

@@ -121,6 +121,21 @@ TEST(SpatialFilter, SimdRunsGiveTheScalarResultsToTheBit) {
       size_t changed = 0;
       for (size_t i = 0; i < s.v.pixels(); ++i) changed += simd.ao[i] != s.h.ao[i];
       EXPECT_GT(changed, (s.v.pixels() - moved) / 2) << w;
+      if (!irradiance) continue;
+      // The irradiance alone (a later in-frame bounce) is filtered to the same bits, by both
+      // paths, and stays alone.
+      HorizonImage alone;
+      alone.width = s.h.width;
+      alone.height = s.h.height;
+      alone.irradiance = s.h.irradiance;
+      ASSERT_TRUE(alone.irradiance_only());
+      for (bool vectorised : {false, true}) {
+        const HorizonImage a = spatial_filter(s.v, alone, 0.05f, vectorised);
+        EXPECT_TRUE(a.ao.empty() && a.vis.empty() && a.bent.empty());
+        HorizonImage whole = vectorised ? simd : scalar;
+        whole.ao.clear(), whole.vis.clear(), whole.bent.clear();
+        expect_same_bits(a, whole);
+      }
     }
   }
 }

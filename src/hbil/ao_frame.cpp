@@ -128,7 +128,9 @@ HorizonImage search_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& 
   const ViewGBuffer lo = f > 1 ? reduce_view(v, f) : ViewGBuffer{};
   const ViewGBuffer& sv = f > 1 ? lo : v;
   // `radiance` (or null) is released once the search has what it reads of it.
-  auto search = [&](std::vector<Vec3>* radiance) {
+  // `irradiance_only`: a later bounce, whose occlusion is the first's; only its irradiance is
+  // filtered and upsampled.
+  auto search = [&](std::vector<Vec3>* radiance, bool irradiance_only) {
     std::vector<Vec3> reduced;
     if (f > 1 && radiance) {
       reduced = reduce_radiance(v, lo, f, *radiance, tol);
@@ -137,12 +139,18 @@ HorizonImage search_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& 
     }
     HorizonImage h = p.interleave ? horizon_interleaved(sv, c, p.slices, radiance, true, reuse)
                                   : horizon_full(sv, c, p.slices, radiance);
+    if (irradiance_only) {
+      std::vector<float>().swap(h.ao);
+      std::vector<float>().swap(h.vis);
+      std::vector<Vec3>().swap(h.bent);
+    }
     if (p.interleave && p.spatial_filter) h = spatial_filter(sv, h, tol, p.vectorised);
     return f > 1 ? upsample_horizon(v, lo, f, h, tol) : h;
   };
   // Bounce k gathers the outgoing radiance of bounce k − 1 (bounce 0: direct light and
   // Emit where the gather takes it, plus the previous frame's indirect light when the temporal
-  // chain feeds it back). Occlusion is the same every time; the last search's is kept. Each buffer
+  // chain feeds it back). Occlusion is the same every time: the first search's is kept, and the
+  // later bounces filter and upsample their irradiance alone. Each buffer
   // is released at its last use: the feedback and the previous bounce once the source radiance is
   // made, the source radiance once the march has what it reads.
   HorizonImage h;
@@ -178,14 +186,26 @@ HorizonImage search_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& 
     c.fill_map = fill_map.data();
   }
   const bool fresnel = !g.f0.empty() || !g.metallic.empty();
-  for (int bounce = 0; bounce < (gather ? p.bounces : 1); ++bounce) {
+  const int bounces = gather ? p.bounces : 1;
+  HorizonImage occlusion;  // the first bounce's ao, vis and bent, which every bounce shares
+  for (int bounce = 0; bounce < bounces; ++bounce) {
     std::vector<Vec3> L;
     if (gather) {
       L = source_radiance(g, bounce == 0 ? in.feedback : h.irradiance);
       std::vector<Vec3>().swap(in.feedback);
       h = HorizonImage{};
     }
-    h = search(gather ? &L : nullptr);
+    h = search(gather ? &L : nullptr, bounce > 0);
+    if (bounce == 0 && bounces > 1) {
+      occlusion.ao = std::move(h.ao);
+      occlusion.vis = std::move(h.vis);
+      occlusion.bent = std::move(h.bent);
+    }
+    if (bounce + 1 == bounces && bounces > 1) {
+      h.ao = std::move(occlusion.ao);
+      h.vis = std::move(occlusion.vis);
+      h.bent = std::move(occlusion.bent);
+    }
     if (fresnel)
       for (size_t i = 0; i < h.irradiance.size(); ++i) {
         const Vec3 w = diffuse_weight(g, i);

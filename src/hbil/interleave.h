@@ -27,6 +27,9 @@ struct HorizonImage {
   std::vector<float> vis;        // uniform visibility Ω / 2π
   std::vector<Vec3> bent;        // mean slice bent vector, view space, not normalised
   std::vector<Vec3> irradiance;  // E_near / π (eq. 16-18); empty without a radiance source
+  // ao, vis and bent empty: the irradiance alone (a later in-frame bounce, whose occlusion is
+  // the first's), which the spatial filter and the upsample carry as such.
+  bool irradiance_only() const { return ao.empty() && !irradiance.empty(); }
 };
 
 // The result of a search that found nothing: ao = vis = 1, bent = 0 (and irradiance = 0 when
@@ -39,18 +42,22 @@ struct HorizonMean {
   float ao = 0, vis = 0, w = 0;
   Vec3 bent, irradiance;
   void add(const HorizonImage& h, size_t k, float wk) {
-    ao += wk * h.ao[k];
-    vis += wk * h.vis[k];
-    bent += h.bent[k] * wk;
+    if (!h.ao.empty()) {
+      ao += wk * h.ao[k];
+      vis += wk * h.vis[k];
+      bent += h.bent[k] * wk;
+    }
     if (!h.irradiance.empty()) irradiance += h.irradiance[k] * wk;
     w += wk;
   }
   // w > 0.
   void store(HorizonImage& out, size_t p) const {
     const float inv = 1.f / w;  // one division, not eight
-    out.ao[p] = ao * inv;
-    out.vis[p] = vis * inv;
-    out.bent[p] = bent * inv;
+    if (!out.ao.empty()) {
+      out.ao[p] = ao * inv;
+      out.vis[p] = vis * inv;
+      out.bent[p] = bent * inv;
+    }
     if (!out.irradiance.empty()) out.irradiance[p] = irradiance * inv;
   }
 };

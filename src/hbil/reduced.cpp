@@ -64,7 +64,14 @@ std::vector<Vec3> reduce_radiance(const ViewGBuffer& v, const ViewGBuffer& lo, i
 
 HorizonImage upsample_horizon(const ViewGBuffer& v, const ViewGBuffer& lo, int f,
                               const HorizonImage& h, float depth_tolerance) {
-  HorizonImage out = unoccluded_image(v, !h.irradiance.empty());
+  HorizonImage out;
+  if (h.irradiance_only()) {
+    out.width = v.width;
+    out.height = v.height;
+    out.irradiance.assign(v.pixels(), Vec3{});
+  } else {
+    out = unoccluded_image(v, !h.irradiance.empty());
+  }
   const float inv_f = 1.f / float(f);
   tbb::parallel_for(0, v.height, [&](int y) {
     const int j0 = y / f;

@@ -22,7 +22,7 @@ int FilterRun(const ViewGBuffer& g, const HorizonImage& in, float depth_toleranc
   const hn::ScalableTag<float> d;
   using V = hn::Vec<decltype(d)>;
   const int n = int(hn::Lanes(d));
-  const bool has_e = !in.irradiance.empty();
+  const bool has_e = !in.irradiance.empty(), has_occ = !in.ao.empty();
   const V background = hn::Set(d, ViewGBuffer::kBackground), cos_min = hn::Set(d, 0.8f);
   const V one = hn::Set(d, 1.f), zero = hn::Zero(d), dtol = hn::Set(d, depth_tolerance);
   auto load3 = [&](const Vec3* p, V& a, V& b, V& c) { hn::LoadInterleaved3(d, &p->x, a, b, c); };
@@ -52,11 +52,13 @@ int FilterRun(const ViewGBuffer& g, const HorizonImage& in, float depth_toleranc
                                 hn::And(hn::Le(hn::Abs(plane), tol), hn::Ge(facing, cos_min)));
         if (hn::AllFalse(d, ok)) continue;
         auto add = [&](V& acc, V v) { acc = hn::IfThenElse(ok, hn::Add(acc, v), acc); };
-        add(ao, hn::LoadU(d, &in.ao[k]));
-        add(vis, hn::LoadU(d, &in.vis[k]));
         V b0, b1, b2;
-        load3(&in.bent[k], b0, b1, b2);
-        add(bx, b0), add(by, b1), add(bz, b2);
+        if (has_occ) {
+          add(ao, hn::LoadU(d, &in.ao[k]));
+          add(vis, hn::LoadU(d, &in.vis[k]));
+          load3(&in.bent[k], b0, b1, b2);
+          add(bx, b0), add(by, b1), add(bz, b2);
+        }
         if (has_e) {
           load3(&in.irradiance[k], b0, b1, b2);
           add(ex, b0), add(ey, b1), add(ez, b2);
@@ -67,11 +69,13 @@ int FilterRun(const ViewGBuffer& g, const HorizonImage& in, float depth_toleranc
     // HorizonMean::store; background lanes keep what `out` holds (the input's values).
     const V inv = hn::Div(one, hn::IfThenElse(centre, w, one));
     auto keep = [&](V v, V old) { return hn::IfThenElse(centre, hn::Mul(v, inv), old); };
-    hn::StoreU(keep(ao, hn::LoadU(d, &out.ao[c])), d, &out.ao[c]);
-    hn::StoreU(keep(vis, hn::LoadU(d, &out.vis[c])), d, &out.vis[c]);
     V o0, o1, o2;
-    load3(&out.bent[c], o0, o1, o2);
-    hn::StoreInterleaved3(keep(bx, o0), keep(by, o1), keep(bz, o2), d, &out.bent[c].x);
+    if (has_occ) {
+      hn::StoreU(keep(ao, hn::LoadU(d, &out.ao[c])), d, &out.ao[c]);
+      hn::StoreU(keep(vis, hn::LoadU(d, &out.vis[c])), d, &out.vis[c]);
+      load3(&out.bent[c], o0, o1, o2);
+      hn::StoreInterleaved3(keep(bx, o0), keep(by, o1), keep(bz, o2), d, &out.bent[c].x);
+    }
     if (has_e) {
       load3(&out.irradiance[c], o0, o1, o2);
       hn::StoreInterleaved3(keep(ex, o0), keep(ey, o1), keep(ez, o2), d, &out.irradiance[c].x);
