@@ -73,8 +73,8 @@ void MarchBitmaskRow(const SampleView& view, int i0, int j, int count, const flo
   // The gather log, lane by lane until the lanes' pixels are appended in order: lane l's
   // entries are lane_entries[l * cap, l * cap + lane_n[l]), its count of slice s
   // lane_counts[l * n_slices + s]. A lane logs at most one entry a step and side and one
-  // fill a slice, so each lane's run has room for them all plus one: every lane's entry is
-  // written at its run's end and counted only where the lane logs (no branch per lane).
+  // fill a slice, so each lane's run has room for them all (no growth, no check per entry);
+  // only the lanes that log are visited, through the bits of their mask.
   std::vector<GatherEntry> lane_entries;
   std::vector<std::uint16_t> lane_counts(N * size_t(n_slices));
   size_t cap = 0;
