@@ -82,31 +82,47 @@ void BM_Search(benchmark::State& state) {
                  std::to_string(n) + "x" + std::to_string(n));
 }
 
-// The march alone, the kernel: horizon_interleaved on the texels search_frame marches (the
-// reduced view at the default search_scale), without the spatial filter and the upsample
-// around it, which BM_Search includes. The gather's source radiance is a constant (the
-// march's cost does not depend on its values). Counter samples/s as BM_Search's, over the
-// texels marched.
+// What BM_March and BM_Record march: the texels search_frame marches (the reduced view at the
+// default search_scale) with the default preset's configuration, and a constant source radiance
+// for the gather (the march's cost does not depend on its values).
+struct MarchInput {
+  Params p;
+  int n = 1;  // search_scale
+  ViewGBuffer v, lo;
+  HorizonConfig c;
+  std::vector<Vec3> radiance;
+  explicit MarchInput(bool gather) {
+    p.outputs = gather ? std::vector<std::string>{"ao", "bentcone", "irradiance"}
+                       : std::vector<std::string>{"ao", "bentcone"};
+    const Frame& f = frame();
+    v = make_view_gbuffer(f.g, f.cam, p);
+    n = effective_search_scale(p, v.width, v.height);
+    if (n > 1) lo = reduce_view(v, n);
+    c = make_horizon_config(p, f.cam);
+    radiance.assign(texels().pixels(), Vec3{0.5f, 0.5f, 0.5f});
+  }
+  const ViewGBuffer& texels() const { return n > 1 ? lo : v; }
+  // Counter samples/s (as BM_Search's, over the texels marched) and the label.
+  void count(benchmark::State& state, bool gather) const {
+    const ViewGBuffer& sv = texels();
+    const int per_side = p.steps + (gather ? p.gather_steps : 0);
+    state.counters["samples/s"] = benchmark::Counter(double(sv.pixels()) * p.slices * 2 * per_side,
+                                                     benchmark::Counter::kIsIterationInvariantRate);
+    state.SetLabel(std::to_string(sv.width) + "x" + std::to_string(sv.height) + " texels marched");
+  }
+};
+
+// The march alone, the kernel: horizon_interleaved on MarchInput's texels, without the spatial
+// filter and the upsample around it, which BM_Search includes.
 void BM_March(benchmark::State& state) {
   const bool gather = state.range(0) != 0;
-  Params p;
-  p.outputs = gather ? std::vector<std::string>{"ao", "bentcone", "irradiance"}
-                     : std::vector<std::string>{"ao", "bentcone"};
-  const Frame& f = frame();
-  const ViewGBuffer v = make_view_gbuffer(f.g, f.cam, p);
-  const int n = effective_search_scale(p, v.width, v.height);
-  const ViewGBuffer lo = n > 1 ? reduce_view(v, n) : ViewGBuffer{};
-  const ViewGBuffer& sv = n > 1 ? lo : v;
-  const HorizonConfig c = make_horizon_config(p, f.cam);
-  const std::vector<Vec3> radiance(sv.pixels(), Vec3{0.5f, 0.5f, 0.5f});
+  const MarchInput in(gather);
   for (auto _ : state) {
-    HorizonImage h = horizon_interleaved(sv, c, p.slices, gather ? &radiance : nullptr);
+    HorizonImage h =
+        horizon_interleaved(in.texels(), in.c, in.p.slices, gather ? &in.radiance : nullptr);
     benchmark::DoNotOptimize(h.ao.data());
   }
-  const int per_side = p.steps + (gather ? p.gather_steps : 0);
-  state.counters["samples/s"] = benchmark::Counter(double(sv.pixels()) * p.slices * 2 * per_side,
-                                                   benchmark::Counter::kIsIterationInvariantRate);
-  state.SetLabel(std::to_string(sv.width) + "x" + std::to_string(sv.height) + " texels marched");
+  in.count(state, gather);
 }
 BENCHMARK(BM_March)
     ->ArgNames({"gather"})
@@ -118,34 +134,25 @@ BENCHMARK(BM_March)
 // The recorded gather (interleave.h, GatherRecord), as the calibration's solve and the later
 // in-frame bounces use it: argument 0 marches with the gather and no record (BM_March's
 // gather row), 1 marches and records into an empty record, 2 replays a filled record (sums
-// it with the radiance, no march). Counter samples/s as BM_March's.
+// it with the radiance, no march). Counters as BM_March's, and the record's entries.
 void BM_Record(benchmark::State& state) {
   const int mode = int(state.range(0));
-  Params p;
-  p.outputs = {"ao", "bentcone", "irradiance"};
-  const Frame& f = frame();
-  const ViewGBuffer v = make_view_gbuffer(f.g, f.cam, p);
-  const int n = effective_search_scale(p, v.width, v.height);
-  const ViewGBuffer lo = n > 1 ? reduce_view(v, n) : ViewGBuffer{};
-  const ViewGBuffer& sv = n > 1 ? lo : v;
-  const HorizonConfig c = make_horizon_config(p, f.cam);
-  const std::vector<Vec3> radiance(sv.pixels(), Vec3{0.5f, 0.5f, 0.5f});
+  const MarchInput in(true);
+  auto search = [&](GatherRecord* r) {
+    return horizon_interleaved(in.texels(), in.c, in.p.slices, &in.radiance, true, r);
+  };
   GatherRecord filled;
-  if (mode == 2) horizon_interleaved(sv, c, p.slices, &radiance, true, &filled);
+  if (mode == 2) search(&filled);
   size_t entries = 0;
   for (auto _ : state) {
     GatherRecord fresh;
-    GatherRecord* r = mode == 0 ? nullptr : mode == 1 ? &fresh : &filled;
-    HorizonImage h = horizon_interleaved(sv, c, p.slices, &radiance, true, r);
+    HorizonImage h = search(mode == 0 ? nullptr : mode == 1 ? &fresh : &filled);
     benchmark::DoNotOptimize(h.irradiance.data());
     entries = 0;
     for (const GatherLog& row : (mode == 2 ? filled : fresh).rows) entries += row.entries.size();
   }
-  const int per_side = p.steps + p.gather_steps;
-  state.counters["samples/s"] = benchmark::Counter(double(sv.pixels()) * p.slices * 2 * per_side,
-                                                   benchmark::Counter::kIsIterationInvariantRate);
+  in.count(state, true);
   state.counters["entries"] = double(entries);
-  state.SetLabel(std::to_string(sv.width) + "x" + std::to_string(sv.height) + " texels marched");
 }
 BENCHMARK(BM_Record)
     ->ArgNames({"mode"})

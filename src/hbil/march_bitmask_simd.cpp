@@ -76,7 +76,7 @@ void MarchBitmaskRow(const SampleView& view, int i0, int j, int count, const flo
   // fill a slice, so each lane's run has room for them all (no growth, no check per entry);
   // only the lanes that log are visited, through the bits of their mask.
   std::vector<GatherEntry> lane_entries;
-  std::vector<std::uint16_t> lane_counts(N * size_t(n_slices));
+  std::vector<std::uint16_t> lane_counts(log ? N * size_t(n_slices) : 0);
   size_t cap = 0;
   std::uint32_t lane_n[kMaxLanes] = {}, slice_start[kMaxLanes] = {};
   auto begin_slice = [&] {
@@ -101,7 +101,7 @@ void MarchBitmaskRow(const SampleView& view, int i0, int j, int count, const flo
     const PixelLanes px = LoadPixels(d, view, i0, j, base, count, c);
     if (hn::AllFalse(d, px.valid)) continue;
     if (log) {
-      cap = size_t(n_slices) * (2 * size_t(px.n_steps) + 1) + 1;
+      cap = size_t(n_slices) * (2 * size_t(px.n_steps) + 1);
       if (lane_entries.size() < N * cap) lane_entries.resize(N * cap);
       for (size_t l = 0; l < N; ++l) lane_n[l] = 0;
     }
