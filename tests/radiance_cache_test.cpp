@@ -19,10 +19,16 @@ namespace {
 
 constexpr double kPi = std::numbers::pi;
 
+// How add_face adds its frame: as computed (add, its indirect light E), or ahead of its turn
+// (add_ahead, without E), possibly with a cut.
+enum class As { computed, ahead, ahead_cut };
+
 // Frame `frame` of a camera at the origin looking along `axis` (90-degree field of view),
-// inside a sphere of radius 5 whose surface sends radiance L0 (DiffCol 1, DiffDir L0); with
-// `sky`, nothing is there (every pixel background).
-void add_face(RadianceCache& cache, const Vec3d& axis, int frame, float L0, bool sky = false) {
+// inside a sphere of radius 5 whose surface sends radiance L0 (DiffCol 1, DiffDir L0 − E, E
+// its indirect light: 0.25 when added as computed); with `sky`, nothing is there (every pixel
+// background).
+void add_face(RadianceCache& cache, const Vec3d& axis, int frame, float L0, bool sky = false,
+              As as = As::computed) {
   const Vec3d up = std::fabs(axis.z) > 0.9 ? Vec3d{0, 1, 0} : Vec3d{0, 0, 1};
   const Camera cam = test::look_at(48, 48, 90, {0, 0, 0}, axis, up);
   ViewGBuffer v;
@@ -32,18 +38,25 @@ void add_face(RadianceCache& cache, const Vec3d& axis, int frame, float L0, bool
   GBuffer g;
   g.width = g.height = 48;
   g.diffcol.assign(48 * 48, Vec3{1, 1, 1});
-  g.diffdir.assign(48 * 48, Vec3{L0, L0, L0});
+  const float E = as == As::computed ? 0.25f : 0.f;
+  g.diffdir.assign(48 * 48, Vec3{L0 - E, L0 - E, L0 - E});
   for (int y = 0; y < 48; ++y)
     for (int x = 0; x < 48; ++x) {
       const Vec3d d = normalize_or_zero(cam.unproject(x + 0.5, y + 0.5, 1.0)) * 5.0;
       v.position[size_t(y) * 48 + x] = sky ? Vec3{0, 0, ViewGBuffer::kBackground * 2} : Vec3(d);
     }
-  cache.add(v, cam, g, std::vector<Vec3>(48 * 48), frame);
+  if (as == As::computed)
+    cache.add(v, cam, g, std::vector<Vec3>(48 * 48, Vec3{E, E, E}), frame);
+  else
+    cache.add_ahead(v, cam, g, frame, as == As::ahead_cut);
 }
-void add_sphere(RadianceCache& cache, int frame, float L0, bool sky = false) {
+void add_sphere(RadianceCache& cache, int frame, float L0, bool sky = false, As as = As::computed) {
+  bool first = true;
   for (const Vec3d& a : {Vec3d{1, 0, 0}, Vec3d{-1, 0, 0}, Vec3d{0, 1, 0}, Vec3d{0, -1, 0},
-                         Vec3d{0, 0, 1}, Vec3d{0, 0, -1}})
-    add_face(cache, a, frame, L0, sky);
+                         Vec3d{0, 0, 1}, Vec3d{0, 0, -1}}) {
+    add_face(cache, a, frame, L0, sky, first ? as : as == As::ahead_cut ? As::ahead : as);
+    first = false;
+  }
 }
 
 // The frame that reads the cache: 60 degrees wide, looking along +y.
@@ -154,6 +167,44 @@ TEST(RadianceCache, FramesOutsideItsWindowAreNotRead) {
   EXPECT_EQ(cache.size(), size_t(48 * 48));  // frame 20 alone, every pixel (48 < kColumns)
 }
 
+// Frames ahead: frame f reads those of f + 1 .. f + ahead that no cut separates from it, with
+// their direct light alone; computing a frame replaces its entries ahead.
+TEST(RadianceCache, FramesAheadAreReadWithinTheirWindowAndNotAcrossACut) {
+  const Camera cam = reader();
+  const Vec3 fb{0.25f, 0.5f, 0.75f};
+  auto back = [&](const RadianceCache& c, int frame) {
+    return RadianceCache::lookup(c.fill_table(cam, frame, fb), Vec3{0, 0, -1});
+  };
+  RadianceCache cache(0, 4);  // no earlier frame, 4 ahead
+  add_sphere(cache, 6, 2.f, false, As::ahead);
+  EXPECT_EQ(cache.size(), size_t(6 * 48 * 48));
+  // Frames 2 .. 5 read frame 6; frame 6 itself, later ones and frame 1 (5 before) do not.
+  for (int frame : {1, 6, 7})
+    for (int ch = 0; ch < 3; ++ch) EXPECT_FLOAT_EQ(back(cache, frame)[ch], fb[ch]) << frame;
+  for (int frame : {2, 5}) EXPECT_NEAR(back(cache, frame).x, 2.0 / 1.05, 0.02) << frame;
+  // A cut at frame 4 (its frame all sky): frames 2 and 3 read neither frame 4 nor frame 6,
+  // frames 4 and 5 read frame 6.
+  RadianceCache cut(0, 4);
+  add_sphere(cut, 4, 0.f, true, As::ahead_cut);
+  add_sphere(cut, 6, 2.f, false, As::ahead);
+  for (int frame : {2, 3})
+    for (int ch = 0; ch < 3; ++ch) EXPECT_FLOAT_EQ(back(cut, frame)[ch], fb[ch]) << frame;
+  EXPECT_NEAR(back(cut, 4).x, 2.0 / 1.05, 0.02);
+  EXPECT_NEAR(back(cut, 5).x, 2.0 / 1.05, 0.02);
+  // Computing frame 6 (its indirect light 0.25 on top of DiffDir 1.75) replaces its entries
+  // ahead; a cache without earlier frames then holds none of them.
+  RadianceCache computed(0, 4);
+  add_sphere(computed, 6, 2.f, false, As::ahead);
+  add_sphere(computed, 6, 2.f);
+  EXPECT_EQ(computed.size(), 0u);
+  // With earlier frames kept, frame 7 reads what frame 6 output: DiffDir 1.75 + E 0.25.
+  RadianceCache both(8, 4);
+  add_sphere(both, 6, 2.f, false, As::ahead);
+  add_sphere(both, 6, 2.f);
+  EXPECT_EQ(both.size(), size_t(6 * 48 * 48));
+  EXPECT_NEAR(back(both, 7).x, 2.0 / 1.05, 0.02);
+}
+
 TEST(RadianceCache, SkyIsKnownDarkness) {
   RadianceCache cache(8);
   add_sphere(cache, 1, 0.f, /*sky=*/true);
@@ -210,7 +261,13 @@ Scene groove(double yaw_deg, bool escape = false) {
 std::vector<AoFrame> run(const Params& p, double yaw_per_frame, int frames, bool escape = false) {
   TemporalChain chain(p);
   std::vector<AoFrame> out;
+  int ahead = 1;  // the next frame to add ahead (radiance_cache_ahead), as the frame loop does
   for (int f = 1; f <= frames; ++f) {
+    for (; ahead <= std::min(frames, f + p.radiance_cache_ahead); ++ahead) {
+      const Scene a = groove(yaw_per_frame * (ahead - 1), escape);
+      const Camera before = groove(yaw_per_frame * (ahead - 2), escape).cam;
+      chain.look_ahead(a.g, a.cam, ahead, false, ahead > 1 ? &before : nullptr);
+    }
     const Scene s = groove(yaw_per_frame * (f - 1), escape);
     out.push_back(chain.process(s.g, s.cam, f, false));
   }
@@ -229,13 +286,17 @@ TEST(RadianceCache, AStaticCameraComputesWhatItDoesWithoutTheCache) {
       p.bounces = 2;
       p.vectorised = vectorised;
       const std::vector<AoFrame> plain = run(p, 0, 4);
-      p.radiance_cache = 8;
-      const std::vector<AoFrame> cached = run(p, 0, 4);
-      for (size_t f = 0; f < plain.size(); ++f) {
-        SCOPED_TRACE(std::to_string(f) + (vectorised ? " simd" : " scalar") +
-                     (automatic ? " auto" : " 0.5"));
-        test::expect_same_bytes(plain[f].irradiance, cached[f].irradiance, "irradiance");
-        test::expect_same_bytes(plain[f].ao, cached[f].ao, "ao");
+      // The frames before, and those ahead too.
+      for (int ahead : {0, 2}) {
+        p.radiance_cache = 8;
+        p.radiance_cache_ahead = ahead;
+        const std::vector<AoFrame> cached = run(p, 0, 4);
+        for (size_t f = 0; f < plain.size(); ++f) {
+          SCOPED_TRACE(std::to_string(f) + (vectorised ? " simd" : " scalar") +
+                       (automatic ? " auto" : " 0.5") + " ahead " + std::to_string(ahead));
+          test::expect_same_bytes(plain[f].irradiance, cached[f].irradiance, "irradiance");
+          test::expect_same_bytes(plain[f].ao, cached[f].ao, "ao");
+        }
       }
     }
 }
@@ -258,6 +319,61 @@ TEST(RadianceCache, WithTheEscapePassAStaticCameraKeepsThePassesFill) {
   EXPECT_NE(std::memcmp(without[1].irradiance.data(), plain[1].irradiance.data(),
                         plain[1].irradiance.size() * sizeof(Vec3)),
             0);
+}
+
+// A camera at height 1 above a dark floor, looking level and turning 40 degrees a frame away
+// from a lit wall 3 behind it (DiffDir 1 there): the turn shows the wall from the fourth frame on.
+Scene turning(int frame) {
+  Scene s;
+  const double yaw = 40.0 * (frame - 1) * kPi / 180;
+  const Vec3d eye{0, 0, 1};
+  s.cam = test::look_at(64, 48, 60, eye, eye + Vec3d{std::sin(yaw), std::cos(yaw), 0});
+  s.g = test::ray_cast(s.cam, {{{0, 0, 0}, {0, 0, 1}, {0, 1, 0}},
+                               {{0, 0, 0}, {0, 0, 1}, {0, -1, 0}},
+                               {{0, -3, 0}, {0, 1, 0}, {0, 0, 1}, 10}});
+  s.g.diffcol.assign(s.g.pixels(), Vec3{0.8f, 0.8f, 0.8f});
+  s.g.diffdir.assign(s.g.pixels(), Vec3{});
+  for (size_t i = 0; i < s.g.pixels(); ++i)
+    if (s.g.depth[i] < 1e9f && s.g.normal[i].y != 0) s.g.diffdir[i] = Vec3{1, 1, 1};
+  return s;
+}
+
+// The first frame of that turn reads what the frames ahead show behind it: the floor, which
+// finds nothing to gather on screen, receives the wall's light; its occlusion is unchanged.
+// A cut given ahead, or found from a camera's jump, keeps the frames before it from reading
+// past it.
+TEST(RadianceCache, AFirstFrameReadsWhatTheFramesAheadShow) {
+  Params p;
+  p.outputs = {"ao", "irradiance"};
+  p.unseen_radiance_auto = false;  // no fill: what leaves the frame is dark without the cache
+  p.unseen_radiance = 0;
+  auto energy = [](const AoFrame& f) {
+    double e = 0;
+    for (const Vec3& v : f.irradiance) e += v.x;
+    return e;
+  };
+  const Scene s1 = turning(1);
+  const AoFrame plain = TemporalChain(p).process(s1.g, s1.cam, 1, false);
+  EXPECT_EQ(energy(plain), 0.0) << "the floor alone gathers nothing on screen";
+  p.radiance_cache_ahead = 4;
+  auto first_frame = [&](int cut_at, bool jump) {
+    TemporalChain chain(p);
+    for (int a = 2; a <= 5; ++a) {
+      const Scene s = turning(a), before = turning(a - 1);
+      const Camera far = test::look_at(64, 48, 60, {50, 0, 1}, {50, 1, 1});
+      chain.look_ahead(s.g, s.cam, a, a == cut_at && !jump,
+                       a == cut_at && jump ? &far : &before.cam);
+    }
+    return chain.process(s1.g, s1.cam, 1, false);
+  };
+  const AoFrame ahead = first_frame(0, false);
+  test::expect_same_bytes(plain.ao, ahead.ao, "ao");
+  EXPECT_GT(energy(ahead), 0.01 * double(ahead.irradiance.size()));
+  // A cut at frame 4, given or a jump: frames 4 and 5 (which show the wall) are not read.
+  for (bool jump : {false, true}) {
+    const AoFrame cut = first_frame(4, jump);
+    EXPECT_LT(energy(cut), 0.5 * energy(ahead)) << (jump ? "jump" : "given");
+  }
 }
 
 TEST(RadianceCache, APlaneAloneReceivesTheFillOfItsNormal) {

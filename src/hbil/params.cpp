@@ -133,6 +133,10 @@ const std::vector<ParamInfo>& params_table() {
        "temporal: the gather's empty directions that leave the frame see the surfaces the last "
        "this many frames showed there (a world-space cache of their positions and outgoing "
        "radiance, looked up from the camera); unseen_radiance where none did; 0: off"},
+      {"radiance_cache_ahead", &Params::radiance_cache_ahead, 0, 256, "frames",
+       "temporal: the same with the surfaces the next this many frames show, read ahead of "
+       "their turn with their direct light alone (DiffCol x DiffDir, + Emit where gathered); a "
+       "frame does not read those beyond a known cut (given, or a camera jump); 0: off"},
       {"history_depth_tolerance", &Params::history_depth_tolerance, 0, 1, "relative",
        "temporal: history whose reprojected depth differs by more than this fraction is "
        "rejected"},

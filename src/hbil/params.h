@@ -97,6 +97,9 @@ struct Params {
   // > 0: the off-screen directions see what the last this many frames showed there
   // (radiance_cache.h); 0: unseen_radiance only.
   int radiance_cache = 0;
+  // > 0: and what the next this many frames show, read ahead of their turn with their direct
+  // light (radiance_cache.h, add_ahead); 0: off.
+  int radiance_cache_ahead = 0;
   double history_depth_tolerance = 0.05;  // relative depth mismatch that rejects history
   double history_normal_cos = 0.8;        // cosine between normals below which history is rejected
   double cut_rejected = 0.6;     // a frame whose history is rejected on more pixels is a cut

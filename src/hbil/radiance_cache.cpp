@@ -33,27 +33,50 @@ bool in_frustum(const Camera& cam, const Vec3d& d) {
 
 }  // namespace
 
-void RadianceCache::add(const ViewGBuffer& v, const Camera& cam, const GBuffer& g,
-                        const std::vector<Vec3>& E, int frame) {
-  // Entries no later frame reads (frame + 1 reads from frame + 1 - frames_ on).
-  const int oldest = frame + 1 - frames_;
-  entries_.erase(std::remove_if(entries_.begin(), entries_.end(),
-                                [&](const Entry& e) { return e.frame < oldest; }),
-                 entries_.end());
+void RadianceCache::append(std::vector<Entry>& to, const ViewGBuffer& v, const Camera& cam,
+                           const GBuffer& g, const std::vector<Vec3>* E, int frame) {
   const int s = std::max(1, (v.width + kColumns - 1) / kColumns);
   for (int y = s / 2; y < v.height; y += s)
     for (int x = s / 2; x < v.width; x += s) {
       const size_t i = size_t(y) * v.width + x;
       if (v.is_background(i)) {
         const Vec3d ray = cam.unproject(x + 0.5, y + 0.5, 1.0);
-        entries_.push_back(
-            {Vec3(normalize_or_zero(cam.view_dir_to_world(ray))), Vec3{}, frame, true});
+        to.push_back({Vec3(normalize_or_zero(cam.view_dir_to_world(ray))), Vec3{}, frame, true});
       } else {
-        const Vec3 l = g.outgoing(i, g.diffdir[i] + E[i]);
+        const Vec3 l = g.outgoing(i, E ? g.diffdir[i] + (*E)[i] : g.diffdir[i]);
         if (!(std::isfinite(l.x) && std::isfinite(l.y) && std::isfinite(l.z))) continue;
-        entries_.push_back({Vec3(cam.view_to_world(Vec3d(v.position[i]))), l, frame, false});
+        to.push_back({Vec3(cam.view_to_world(Vec3d(v.position[i]))), l, frame, false});
       }
     }
+}
+
+void RadianceCache::add(const ViewGBuffer& v, const Camera& cam, const GBuffer& g,
+                        const std::vector<Vec3>& E, int frame) {
+  // Entries no later frame reads (frame + 1 reads from frame + 1 - frames_ on), and this
+  // frame's entries ahead, replaced by what it output.
+  const int oldest = frame + 1 - frames_;
+  entries_.erase(std::remove_if(entries_.begin(), entries_.end(),
+                                [&](const Entry& e) { return e.frame < oldest; }),
+                 entries_.end());
+  ahead_.erase(std::remove_if(ahead_.begin(), ahead_.end(),
+                              [&](const Entry& e) { return e.frame <= frame; }),
+               ahead_.end());
+  cuts_.erase(std::remove_if(cuts_.begin(), cuts_.end(), [&](int c) { return c <= frame; }),
+              cuts_.end());
+  if (frames_ > 0) append(entries_, v, cam, g, &E, frame);
+}
+
+void RadianceCache::add_ahead(const ViewGBuffer& v, const Camera& cam, const GBuffer& g, int frame,
+                              bool cut) {
+  if (cut) cuts_.push_back(frame);
+  append(ahead_, v, cam, g, nullptr, frame);
+}
+
+bool RadianceCache::reads_ahead(int frame, int ahead) const {
+  if (!(ahead > frame && ahead <= frame + ahead_frames_)) return false;
+  for (int c : cuts_)
+    if (c > frame && c <= ahead) return false;
+  return true;
 }
 
 Vec3 RadianceCache::panorama_ambient(const GBuffer& pano, float background) {
@@ -95,10 +118,11 @@ void RadianceCache::set_panorama(const GBuffer& pano, float background, int fram
 RadianceCache::Sums RadianceCache::fill_sums(const Camera& cam, int frame) const {
   constexpr int W = kProbeWidth, H = kProbeHeight, n_tex = W * H;
   // 1. The probe: nearest distance per texel, then the mean of the entries within the band.
-  // The frames' entries, then the panorama's.
-  const size_t n = entries_.size() + panorama_.size();
+  // The earlier frames' entries, those ahead, then the panorama's.
+  const size_t n_past = entries_.size(), n_frames = n_past + ahead_.size(),
+               n = n_frames + panorama_.size();
   auto entry = [&](size_t k) -> const Entry& {
-    return k < entries_.size() ? entries_[k] : panorama_[k - entries_.size()];
+    return k < n_past ? entries_[k] : k < n_frames ? ahead_[k - n_past] : panorama_[k - n_frames];
   };
   std::vector<float> nearest(n_tex, HUGE_VALF);
   std::vector<int> texel(n, -1);
@@ -106,14 +130,15 @@ RadianceCache::Sums RadianceCache::fill_sums(const Camera& cam, int frame) const
   std::vector<unsigned char> sky(n_tex, 0);
   for (size_t k = 0; k < n; ++k) {
     const Entry& e = entry(k);
-    const bool readable =
-        k < entries_.size() ? e.frame < frame && e.frame >= frame - frames_ : e.frame == frame;
+    const bool readable = k < n_past     ? e.frame < frame && e.frame >= frame - frames_
+                          : k < n_frames ? reads_ahead(frame, e.frame)
+                                         : e.frame == frame;
     if (!readable) continue;
     const Vec3d d = e.sky ? cam.world_dir_to_view(Vec3d(e.p)) : cam.world_to_view(Vec3d(e.p));
     const double len = std::sqrt(dot(d, d));
     // What the frame shows now is searched on screen (and keeps a static camera's fill); the
     // panorama also holds what lies beyond the gather's reach there.
-    const bool panorama = k >= entries_.size();
+    const bool panorama = k >= n_frames;
     if (!(len > 0) || (!panorama && in_frustum(cam, d))) continue;
     double u, v;
     to_map(d, W, H, u, v);
@@ -133,7 +158,7 @@ RadianceCache::Sums RadianceCache::fill_sums(const Camera& cam, int frame) const
     const int t = texel[k];
     if (t < 0 || entry(k).sky || !(dist[k] <= nearest[t] * (1.f + kDepthBand))) continue;
     sum[t] += entry(k).L;
-    seen_by_panorama[t] |= k >= entries_.size();
+    seen_by_panorama[t] |= k >= n_frames;
     ++count[t];
   }
   // Texel directions, solid angles and whether the frustum holds them.

@@ -50,6 +50,15 @@
 // its light being in DiffDir). Then the first frame
 // of a run and single frames have a fill too.
 //
+// Frames ahead (Params::radiance_cache_ahead, add_ahead): a run can also read the frames that
+// follow the one it computes, before their turn (a first pass over the shot, a frame at a
+// time, `ahead` frames in advance). Their entries are those of add with E = 0, the frame's
+// direct light alone (its indirect light is not computed yet), and frame f reads those of
+// frames f + 1 .. f + ahead that no known cut separates from it: a cut given for a frame, or
+// found from its camera's jump from the frame before it (temporal.h, camera_cut). A cut that
+// only the history's rejection finds is not known ahead. When a frame is computed, add
+// replaces its entries ahead with what it output.
+//
 // With an empty cache (a run's first frame, the frame after a cut, single frames) and on a
 // static camera (nothing outside the frustum is known) the fill is the fallback everywhere:
 // the results are those without a cache.
@@ -78,8 +87,9 @@ class RadianceCache {
     bool sky;
   };
 
-  // Entries from at most `frames` frame numbers before the one read (>= 1).
-  explicit RadianceCache(int frames) : frames_(frames) {}
+  // Entries from at most `frames` frame numbers before the one read (0: none), and from at
+  // most `ahead` after it (add_ahead).
+  explicit RadianceCache(int frames, int ahead = 0) : frames_(frames), ahead_frames_(ahead) {}
 
   // Frame `frame`'s view-space G-buffer `v` with camera `cam`: its pixels' outgoing radiance
   // g.DiffCol x (g.DiffDir + E[i]) (+ g.Emit, as above), with E the frame's irradiance / π (size
@@ -87,11 +97,15 @@ class RadianceCache {
   // are dropped.
   void add(const ViewGBuffer& v, const Camera& cam, const GBuffer& g, const std::vector<Vec3>& E,
            int frame);
-  // Drops the frames' entries (a cut); the panorama stays.
+  // Frame `frame` seen ahead of its turn: add's entries with E = 0, read by the `ahead`
+  // frames before it (see above). `cut`: a cut at `frame`, so that no frame before it reads
+  // it or any frame after it. Frames are added in increasing order.
+  void add_ahead(const ViewGBuffer& v, const Camera& cam, const GBuffer& g, int frame, bool cut);
+  // Drops the earlier frames' entries (a cut); the frames ahead and the panorama stay.
   void clear() { entries_.clear(); }
-  size_t size() const { return entries_.size(); }
+  size_t size() const { return entries_.size() + ahead_.size(); }
   // Whether it knows nothing: no frame's entries and no panorama.
-  bool empty() const { return entries_.empty() && panorama_.empty(); }
+  bool empty() const { return entries_.empty() && ahead_.empty() && panorama_.empty(); }
 
   // Frame `frame`'s panorama (world-space positions, background at depth >= background):
   // its geometry pixels on a grid of about kPanoramaColumns columns, read by that frame
@@ -133,9 +147,16 @@ class RadianceCache {
     std::vector<double> unknown, all;
   };
   Sums fill_sums(const Camera& cam, int frame) const;
+  // Appends frame `frame`'s entries to `to`, with E (null: 0).
+  static void append(std::vector<Entry>& to, const ViewGBuffer& v, const Camera& cam,
+                     const GBuffer& g, const std::vector<Vec3>* E, int frame);
+  // Whether frame `frame` reads the entries ahead of frame `ahead`.
+  bool reads_ahead(int frame, int ahead) const;
 
-  int frames_;
-  std::vector<Entry> entries_, panorama_;
+  int frames_, ahead_frames_;
+  // The frames' entries, earlier ones and those ahead (each in frame order), and the panorama's.
+  std::vector<Entry> entries_, ahead_, panorama_;
+  std::vector<int> cuts_;  // the cuts known ahead, in order
 };
 
 }  // namespace hbil

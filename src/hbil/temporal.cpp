@@ -77,7 +77,16 @@ std::string camera_cut(const Camera& prev, const Camera& cur, double depth, cons
   return s.str();
 }
 
-TemporalChain::TemporalChain(Params p) : p_(std::move(p)), cache_(std::max(1, p_.radiance_cache)) {}
+TemporalChain::TemporalChain(Params p)
+    : p_(std::move(p)), cache_(p_.radiance_cache, p_.radiance_cache_ahead) {}
+
+void TemporalChain::look_ahead(const GBuffer& g, const Camera& cam, int frame, bool cut,
+                               const Camera* before) {
+  if (p_.radiance_cache_ahead <= 0) return;
+  const ViewGBuffer v = make_view_gbuffer(g, cam, p_);
+  if (!cut && before) cut = !camera_cut(*before, cam, median_depth(v), p_).empty();
+  cache_.add_ahead(v, cam, g, frame, cut);
+}
 
 AoFrame TemporalChain::process(const GBuffer& g, const Camera& cam, int frame, bool cut,
                                const SH9* environment, TemporalReport* report) {
@@ -161,7 +170,7 @@ AoFrame TemporalChain::run(const GBuffer& g, GBuffer* release, const Camera& cam
   view_ = ViewGBuffer{};
   if (!history) r = Reprojected{};
   // The radiance cache holds the frames since the last cut (a cut may be another set).
-  const bool cache = p_.radiance_cache > 0 && gather;
+  const bool cache = (p_.radiance_cache > 0 || p_.radiance_cache_ahead > 0) && gather;
   if (cut || rep.first) cache_.clear();
   const bool reads_cache = (cache || !p_.panorama.empty()) && gather;
 

@@ -80,6 +80,11 @@ class TemporalChain {
   void set_panorama(const GBuffer& pano, int frame) {
     cache_.set_panorama(pano, float(p_.background_depth), frame);
   }
+  // Frame `frame`, ahead of its turn (Params::radiance_cache_ahead; RadianceCache::add_ahead),
+  // in increasing order. `cut`: a cut given at it; else one is found from the jump of its
+  // camera from `before`'s (the frame's before it; null: none known). Nothing without
+  // radiance_cache_ahead.
+  void look_ahead(const GBuffer& g, const Camera& cam, int frame, bool cut, const Camera* before);
   // Params::unseen_scale for the frames processed next (a calibrated level per frame).
   void set_unseen_scale(double s) { p_.unseen_scale = s; }
 
@@ -100,7 +105,7 @@ class TemporalChain {
   Camera cam_;               // and camera
   int frame_ = 0;            // and frame number
   std::vector<float> data_;  // the history channels per pixel (see above)
-  RadianceCache cache_;      // radiance_cache > 0: what the last frames showed
+  RadianceCache cache_;      // what the last frames (and those ahead) showed
 };
 
 }  // namespace hbil

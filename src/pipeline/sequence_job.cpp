@@ -122,6 +122,17 @@ SequenceJob::SequenceJob(SequencePlan plan, const Params& requested) : plan_(std
     for (int other : *frames)
       if (other != f) others.push_back(io::open_frame(plan_.input.path(other), other, requested));
   p_ = io::resolve_outputs(first_, requested, &why_dropped_);
+  // The frames read ahead (the gather's radiance cache, with a chain): those after the plan
+  // are checked as its own are.
+  if (p_.radiance_cache_ahead > 0 && gathers(p_) && p_.temporal && plan_.input.is_sequence()) {
+    const int begin = plan_.preroll.empty() ? plan_.frames.front() : plan_.preroll.front();
+    const int end = plan_.frames.back() + p_.radiance_cache_ahead;
+    for (int a : plan_.input.existing_frames()) {
+      if (a <= begin || a > end) continue;
+      ahead_.push_back(a);
+      if (a > plan_.frames.back()) others.push_back(io::open_frame(plan_.input.path(a), a, p_));
+    }
+  }
   // slices "auto": the chain is decided on the whole plan, as run() decides it.
   p_ = resolve_auto_slices(p_, p_.temporal && plan_.preroll.size() + plan_.frames.size() > 1);
   const io::InputFrame& head = plan_.preroll.empty() ? first_ : others.front();
@@ -254,6 +265,28 @@ void SequenceJob::run(const Hooks& hooks, Overlap overlap_mode, const SH9* given
     Delivery d = f.get();
     if (hooks.delivered) hooks.delivered(d.result);
   };
+  // Params::radiance_cache_ahead: the frames of ahead_ up to radiance_cache_ahead after the
+  // frame computed are added to the chain's cache before it (each read once more, its direct
+  // light alone), in order; a gap in them is a cut as in the chain.
+  size_t ahead_next = 0;
+  std::optional<Camera> ahead_cam;
+  int ahead_last = 0;
+  auto look_ahead = [&](int frame, const Camera& cam) {
+    if (!chain || ahead_.empty()) return;
+    if (!ahead_cam) ahead_cam = cam, ahead_last = frame;
+    for (; ahead_next < ahead_.size() && ahead_[ahead_next] <= frame + p_.radiance_cache_ahead;
+         ++ahead_next) {
+      const int a = ahead_[ahead_next];
+      if (a <= ahead_last) continue;
+      const io::InputFrame in = io::open_frame(plan_.input.path(a), a, p_);
+      GBuffer g = io::read_fields(in, io::fields_needed(in, p_), p_);
+      const Camera c = io::find_camera(in, g, p_);
+      const bool cut = plan_.cuts.count(a) > 0 || (step > 0 && a - ahead_last > step);
+      chain->look_ahead(g, c, a, cut, &*ahead_cam);
+      ahead_cam = c;
+      ahead_last = a;
+    }
+  };
   std::future<Loaded> next = std::async(std::launch::async, load, order.front());
   std::future<Delivery> delivering;  // the previous frame's
   std::string first_path;
@@ -304,6 +337,7 @@ void SequenceJob::run(const Hooks& hooks, Overlap overlap_mode, const SH9* given
         }
         cur.pano = GBuffer{};
       }
+      look_ahead(frame, cur.cam);
       if (!calibration_.empty()) {
         const double s = calibrated_scale(frame, cur.g, cur.cam);
         if (chain) chain->set_unseen_scale(s);

@@ -141,6 +141,10 @@ class SequenceJob {
   SceneScale scene_;
   std::optional<SH9> environment_;
   Calibration calibration_;
+  // Params::radiance_cache_ahead: the frames on disk a run reads ahead, from its first frame's
+  // next to radiance_cache_ahead after its last (beyond the plan too: a chunk reads what the
+  // whole run reads).
+  std::vector<int> ahead_;
 };
 
 // The step of a sequence's frames, ascending: the smallest difference between consecutive
