@@ -15,6 +15,7 @@
 
 #include "analytic_scenes.h"
 #include "hbil/ao_frame.h"
+#include "test_util.h"
 
 namespace hbil {
 namespace {
@@ -154,6 +155,56 @@ TEST(ReducedSearch, TheIrradianceAloneIsUpsampledToTheSameBits) {
     lit += up.irradiance[p].y > 0.f;
   }
   EXPECT_GT(lit, v.pixels() / 2);
+}
+
+// The later bounces upsample by a plan made once (plan_upsample): the direct upsample's bits,
+// for the whole result and the irradiance alone, at scales 2 and 3, with pixels that take the
+// bilinear texels, pixels that fall back to their nearest texel, and background.
+TEST(ReducedSearch, AnUpsamplePlanGivesTheSameBits) {
+  ViewGBuffer v = two_planes(23, 11, 9);
+  for (size_t p = 0; p < v.pixels(); ++p) v.position[p].z += 0.01f * float((p * 7) % 5);
+  v.position[5] = Vec3{0, 0, ViewGBuffer::kBackground * 2};
+  v.normal[5] = Vec3{};
+  // Pixels (5, 5) and (7, 7), no texel at scale 2 or 3, far in front of their neighbours: no
+  // texel around them is on their surface.
+  for (size_t p : {size_t(5 * 23 + 5), size_t(7 * 23 + 7)}) v.position[p] = v.position[p] * 0.5f;
+  for (int f : {2, 3}) {
+    const ViewGBuffer lo = reduce_view(v, f);
+    HorizonImage h;
+    h.width = lo.width;
+    h.height = lo.height;
+    for (size_t k = 0; k < lo.pixels(); ++k) {
+      const float a = 0.03f * float(k % 13);
+      h.ao.push_back(a);
+      h.vis.push_back(0.5f * a);
+      h.bent.push_back(Vec3{a, 0, -a});
+      h.irradiance.push_back(Vec3{a, 2 * a, 0.5f - a});
+    }
+    HorizonImage alone;
+    alone.width = h.width;
+    alone.height = h.height;
+    alone.irradiance = h.irradiance;
+    const UpsamplePlan plan = plan_upsample(v, lo, f, 0.05f);
+    size_t bilinear = 0, nearest = 0, none = 0;
+    for (std::uint32_t c : plan.choice)
+      (c == UpsamplePlan::kNone ? none : c & UpsamplePlan::kBilinear ? bilinear : nearest)++;
+    EXPECT_GT(bilinear, v.pixels() / 2) << f;
+    EXPECT_GT(nearest, 0u) << f;
+    EXPECT_GT(none, 0u) << f;
+    for (const HorizonImage* in : {&h, &alone}) {
+      SCOPED_TRACE(std::to_string(f) + (in == &h ? " whole" : " irradiance alone"));
+      const HorizonImage direct = upsample_horizon(v, lo, f, *in, 0.05f);
+      const HorizonImage planned = upsample_horizon(v, lo, plan, *in);
+      test::expect_same_bytes(direct.irradiance, planned.irradiance, "irradiance");
+      if (in == &alone) {
+        EXPECT_TRUE(planned.ao.empty() && planned.vis.empty() && planned.bent.empty());
+        continue;
+      }
+      test::expect_same_bytes(direct.ao, planned.ao, "ao");
+      test::expect_same_bytes(direct.vis, planned.vis, "vis");
+      test::expect_same_bytes(direct.bent, planned.bent, "bent");
+    }
+  }
 }
 
 TEST(ReducedSearch, UpsampleOfASmoothFieldIsBilinear) {

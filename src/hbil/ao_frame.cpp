@@ -127,6 +127,7 @@ HorizonImage search_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& 
   const float tol = float(p.depth_tolerance);
   const ViewGBuffer lo = f > 1 ? reduce_view(v, f) : ViewGBuffer{};
   const ViewGBuffer& sv = f > 1 ? lo : v;
+  UpsamplePlan plan;  // with later bounces (f > 1): which texels each pixel takes
   // `radiance` (or null) is released once the search has what it reads of it.
   // `irradiance_only`: a later bounce, whose occlusion is the first's; only its irradiance is
   // filtered and upsampled.
@@ -137,15 +138,20 @@ HorizonImage search_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& 
       std::vector<Vec3>().swap(*radiance);
       radiance = &reduced;
     }
-    HorizonImage h = p.interleave ? horizon_interleaved(sv, c, p.slices, radiance, true, reuse)
-                                  : horizon_full(sv, c, p.slices, radiance);
+    HorizonImage h =
+        p.interleave ? horizon_interleaved(sv, c, p.slices, radiance, true, reuse, irradiance_only)
+                     : horizon_full(sv, c, p.slices, radiance);
     if (irradiance_only) {
       std::vector<float>().swap(h.ao);
       std::vector<float>().swap(h.vis);
       std::vector<Vec3>().swap(h.bent);
     }
     if (p.interleave && p.spatial_filter) h = spatial_filter(sv, h, tol, p.vectorised);
-    return f > 1 ? upsample_horizon(v, lo, f, h, tol) : h;
+    if (f == 1) return h;
+    // The texels each pixel takes are the same for every bounce: decided once.
+    if (gather && p.bounces > 1 && plan.choice.empty()) plan = plan_upsample(v, lo, f, tol);
+    return plan.choice.empty() ? upsample_horizon(v, lo, f, h, tol)
+                               : upsample_horizon(v, lo, plan, h);
   };
   // Bounce k gathers the outgoing radiance of bounce k − 1 (bounce 0: direct light and
   // Emit where the gather takes it, plus the previous frame's indirect light when the temporal

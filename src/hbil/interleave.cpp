@@ -91,10 +91,17 @@ HorizonImage horizon_full(const ViewGBuffer& g, const HorizonConfig& c, int slic
 
 HorizonImage horizon_interleaved(const ViewGBuffer& g, const HorizonConfig& c, int slices,
                                  const std::vector<Vec3>* radiance, bool copy_subbuffers,
-                                 GatherRecord* record) {
+                                 GatherRecord* record, bool irradiance_only) {
   if (!c.bitmask || !radiance) record = nullptr;
   const bool replay = record && record->filled;
-  HorizonImage out = replay ? record->first : unoccluded_image(g, radiance != nullptr);
+  HorizonImage out;
+  if (replay && irradiance_only) {
+    out.width = record->first.width;
+    out.height = record->first.height;
+    out.irradiance = record->first.irradiance;
+  } else {
+    out = replay ? record->first : unoccluded_image(g, radiance != nullptr);
+  }
   // Sub-buffer of phase (ox, oy): texel (i, j) is full-resolution pixel (4i + ox, 4j + oy).
   struct Sub {
     int ox, oy, w, h;
@@ -203,6 +210,11 @@ HorizonImage horizon_interleaved(const ViewGBuffer& g, const HorizonConfig& c, i
   if (record && !replay) {
     record->first = out;
     record->filled = true;
+  }
+  if (irradiance_only && !replay) {
+    std::vector<float>().swap(out.ao);
+    std::vector<float>().swap(out.vis);
+    std::vector<Vec3>().swap(out.bent);
   }
   return out;
 }

@@ -86,8 +86,11 @@ struct GatherRecord {
 // `record` (bitmask method with a radiance source; else ignored): when empty, the search
 // fills it; when filled, nothing is marched: ao, vis and bent are the recorded ones and the
 // irradiance is the recorded gather summed with `radiance`, identical to a new search.
+// `irradiance_only`: the result holds the irradiance alone (HorizonImage::irradiance_only; a
+// later bounce, whose occlusion is the first's), not copied from the record on a replay.
 HorizonImage horizon_interleaved(const ViewGBuffer& g, const HorizonConfig& c, int slices,
                                  const std::vector<Vec3>* radiance = nullptr,
-                                 bool copy_subbuffers = true, GatherRecord* record = nullptr);
+                                 bool copy_subbuffers = true, GatherRecord* record = nullptr,
+                                 bool irradiance_only = false);
 
 }  // namespace hbil

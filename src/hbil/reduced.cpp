@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 
 #include "hbil/spatial_filter.h"
@@ -62,55 +63,104 @@ std::vector<Vec3> reduce_radiance(const ViewGBuffer& v, const ViewGBuffer& lo, i
   return out;
 }
 
+namespace {
+
+// What pixel (x, y) of v takes from lo (UpsamplePlan's encoding).
+std::uint32_t upsample_choice(const ViewGBuffer& v, const ViewGBuffer& lo, int f, int x, int y,
+                              float depth_tolerance) {
+  const size_t p = size_t(y) * v.width + x;
+  if (v.is_background(p)) return UpsamplePlan::kNone;
+  const Vec3 &P = v.position[p], &n = v.normal[p];
+  const float tol = depth_tolerance * P.z;
+  const int i0 = x / f, j0 = y / f;
+  const float inv_f = 1.f / float(f);
+  const float tx = float(x - f * i0) * inv_f, ty = float(y - f * j0) * inv_f;
+  std::uint32_t mask = 0;
+  for (int dj = 0; dj < 2; ++dj)
+    for (int di = 0; di < 2; ++di) {
+      const int i = i0 + di, j = j0 + dj;
+      const float wk = (di ? tx : 1.f - tx) * (dj ? ty : 1.f - ty);
+      if (!(wk > 0.f) || i >= lo.width || j >= lo.height) continue;
+      const size_t k = size_t(j) * lo.width + i;
+      if (lo.is_background(k) || !same_surface(P, n, lo.position[k], lo.normal[k], tol)) continue;
+      mask |= 1u << (2 * dj + di);
+    }
+  if (mask) return UpsamplePlan::kBilinear | mask;
+  // No texel on this pixel's surface: the nearest to its tangent plane that faces its way,
+  // among the 4x4 texels around it.
+  float best = std::numeric_limits<float>::infinity();
+  size_t at = 0;
+  for (int j = std::max(j0 - 1, 0); j <= std::min(j0 + 2, lo.height - 1); ++j)
+    for (int i = std::max(i0 - 1, 0); i <= std::min(i0 + 2, lo.width - 1); ++i) {
+      const size_t k = size_t(j) * lo.width + i;
+      if (lo.is_background(k) || dot(lo.normal[k], n) <= 0.f) continue;
+      const float dist = std::fabs(dot(lo.position[k] - P, n));
+      if (dist < best) best = dist, at = k;
+    }
+  return best == std::numeric_limits<float>::infinity() ? UpsamplePlan::kNone : std::uint32_t(at);
+}
+
+// Pixel (x, y) of `out` from h by its choice (upsample_choice).
+void upsample_apply(std::uint32_t choice, const ViewGBuffer& v, const ViewGBuffer& lo, int f, int x,
+                    int y, const HorizonImage& h, HorizonImage& out) {
+  if (choice == UpsamplePlan::kNone) return;
+  HorizonMean mean;
+  if (choice & UpsamplePlan::kBilinear) {
+    const int i0 = x / f, j0 = y / f;
+    const float inv_f = 1.f / float(f);
+    const float tx = float(x - f * i0) * inv_f, ty = float(y - f * j0) * inv_f;
+    for (int dj = 0; dj < 2; ++dj)
+      for (int di = 0; di < 2; ++di) {
+        if (!(choice & (1u << (2 * dj + di)))) continue;
+        const float wk = (di ? tx : 1.f - tx) * (dj ? ty : 1.f - ty);
+        mean.add(h, size_t(j0 + dj) * lo.width + (i0 + di), wk);
+      }
+  } else {
+    mean.add(h, choice, 1.f);
+  }
+  mean.store(out, size_t(y) * v.width + x);
+}
+
+// An image of v's size to upsample h into: background pixels keep the unoccluded default.
+HorizonImage upsample_target(const ViewGBuffer& v, const HorizonImage& h) {
+  if (!h.irradiance_only()) return unoccluded_image(v, !h.irradiance.empty());
+  HorizonImage out;
+  out.width = v.width;
+  out.height = v.height;
+  out.irradiance.assign(v.pixels(), Vec3{});
+  return out;
+}
+
+}  // namespace
+
 HorizonImage upsample_horizon(const ViewGBuffer& v, const ViewGBuffer& lo, int f,
                               const HorizonImage& h, float depth_tolerance) {
-  HorizonImage out;
-  if (h.irradiance_only()) {
-    out.width = v.width;
-    out.height = v.height;
-    out.irradiance.assign(v.pixels(), Vec3{});
-  } else {
-    out = unoccluded_image(v, !h.irradiance.empty());
-  }
-  const float inv_f = 1.f / float(f);
+  HorizonImage out = upsample_target(v, h);
   tbb::parallel_for(0, v.height, [&](int y) {
-    const int j0 = y / f;
-    const float ty = float(y - f * j0) * inv_f;
-    for (int x = 0; x < v.width; ++x) {
-      const size_t p = size_t(y) * v.width + x;
-      if (v.is_background(p)) continue;
-      const Vec3 &P = v.position[p], &n = v.normal[p];
-      const float tol = depth_tolerance * P.z;
-      const int i0 = x / f;
-      const float tx = float(x - f * i0) * inv_f;
-      HorizonMean mean;
-      for (int dj = 0; dj < 2; ++dj)
-        for (int di = 0; di < 2; ++di) {
-          const int i = i0 + di, j = j0 + dj;
-          const float wk = (di ? tx : 1.f - tx) * (dj ? ty : 1.f - ty);
-          if (!(wk > 0.f) || i >= lo.width || j >= lo.height) continue;
-          const size_t k = size_t(j) * lo.width + i;
-          if (lo.is_background(k) || !same_surface(P, n, lo.position[k], lo.normal[k], tol))
-            continue;
-          mean.add(h, k, wk);
-        }
-      if (!(mean.w > 0.f)) {
-        // No texel on this pixel's surface: the nearest to its tangent plane that faces its
-        // way, among the 4x4 texels around it.
-        float best = std::numeric_limits<float>::infinity();
-        size_t at = 0;
-        for (int j = std::max(j0 - 1, 0); j <= std::min(j0 + 2, lo.height - 1); ++j)
-          for (int i = std::max(i0 - 1, 0); i <= std::min(i0 + 2, lo.width - 1); ++i) {
-            const size_t k = size_t(j) * lo.width + i;
-            if (lo.is_background(k) || dot(lo.normal[k], n) <= 0.f) continue;
-            const float dist = std::fabs(dot(lo.position[k] - P, n));
-            if (dist < best) best = dist, at = k;
-          }
-        if (best == std::numeric_limits<float>::infinity()) continue;
-        mean.add(h, at, 1.f);
-      }
-      mean.store(out, p);
-    }
+    for (int x = 0; x < v.width; ++x)
+      upsample_apply(upsample_choice(v, lo, f, x, y, depth_tolerance), v, lo, f, x, y, h, out);
+  });
+  return out;
+}
+
+UpsamplePlan plan_upsample(const ViewGBuffer& v, const ViewGBuffer& lo, int f,
+                           float depth_tolerance) {
+  UpsamplePlan plan;
+  plan.f = f;
+  plan.choice.resize(v.pixels());
+  tbb::parallel_for(0, v.height, [&](int y) {
+    for (int x = 0; x < v.width; ++x)
+      plan.choice[size_t(y) * v.width + x] = upsample_choice(v, lo, f, x, y, depth_tolerance);
+  });
+  return plan;
+}
+
+HorizonImage upsample_horizon(const ViewGBuffer& v, const ViewGBuffer& lo, const UpsamplePlan& plan,
+                              const HorizonImage& h) {
+  HorizonImage out = upsample_target(v, h);
+  tbb::parallel_for(0, v.height, [&](int y) {
+    for (int x = 0; x < v.width; ++x)
+      upsample_apply(plan.choice[size_t(y) * v.width + x], v, lo, plan.f, x, y, h, out);
   });
   return out;
 }

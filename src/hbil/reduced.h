@@ -19,6 +19,7 @@
 // plane among those facing its way, else the unoccluded default.
 #pragma once
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -49,5 +50,20 @@ std::vector<Vec3> reduce_radiance(const ViewGBuffer& v, const ViewGBuffer& lo, i
 // unoccluded default: ao = vis = 1, bent = 0, irradiance = 0).
 HorizonImage upsample_horizon(const ViewGBuffer& v, const ViewGBuffer& lo, int f,
                               const HorizonImage& h, float depth_tolerance);
+
+// Which texels of lo each pixel of v takes in the upsample, decided once for the searches of a
+// frame that share its geometry (the in-frame bounces): per pixel kNone (background, or no
+// texel facing its way), kBilinear | a mask of the 2x2 texels on its surface (bit 2 dj + di),
+// or the index of the one texel it takes.
+struct UpsamplePlan {
+  static constexpr std::uint32_t kNone = 0xffffffffu, kBilinear = 0x80000000u;
+  int f = 1;
+  std::vector<std::uint32_t> choice;
+};
+UpsamplePlan plan_upsample(const ViewGBuffer& v, const ViewGBuffer& lo, int f,
+                           float depth_tolerance);
+// upsample_horizon by a plan: the same result to the bit.
+HorizonImage upsample_horizon(const ViewGBuffer& v, const ViewGBuffer& lo, const UpsamplePlan& plan,
+                              const HorizonImage& h);
 
 }  // namespace hbil
