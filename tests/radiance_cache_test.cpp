@@ -321,8 +321,8 @@ TEST(RadianceCache, WithTheEscapePassAStaticCameraKeepsThePassesFill) {
             0);
 }
 
-// A camera at height 1 above a dark floor, looking level and turning 40 degrees a frame away
-// from a lit wall 3 behind it (DiffDir 1 there): the turn shows the wall from the fourth frame on.
+// A camera at height 1 above a dark floor, looking level with a lit wall 3 behind it (DiffDir 1
+// there) and turning 40 degrees a frame: the turn shows the wall from the fourth frame on.
 Scene turning(int frame) {
   Scene s;
   const double yaw = 40.0 * (frame - 1) * kPi / 180;
