@@ -122,12 +122,8 @@ TEST(ReducedSearch, UpsampleNeverMixesSurfaces) {
     }
 }
 
-TEST(ReducedSearch, TheIrradianceAloneIsUpsampledToTheSameBits) {
-  // A later in-frame bounce upsamples its irradiance alone: the same values as the whole
-  // result's, on rough surfaces where some pixels fall back to their nearest texel.
-  ViewGBuffer v = two_planes(23, 11, 9);
-  for (size_t p = 0; p < v.pixels(); ++p) v.position[p].z += 0.01f * float((p * 7) % 5);
-  const ViewGBuffer lo = reduce_view(v, 2);
+// A search result on lo with a different value in every field of neighbouring texels.
+HorizonImage texel_pattern(const ViewGBuffer& lo) {
   HorizonImage h;
   h.width = lo.width;
   h.height = lo.height;
@@ -138,11 +134,26 @@ TEST(ReducedSearch, TheIrradianceAloneIsUpsampledToTheSameBits) {
     h.bent.push_back(Vec3{0, 0, -a});
     h.irradiance.push_back(Vec3{a, 2 * a, 0.5f - a});
   }
-  const HorizonImage whole = upsample_horizon(v, lo, 2, h, 0.05f);
+  return h;
+}
+// Its irradiance alone (a later bounce's).
+HorizonImage irradiance_of(const HorizonImage& h) {
   HorizonImage alone;
   alone.width = h.width;
   alone.height = h.height;
   alone.irradiance = h.irradiance;
+  return alone;
+}
+
+TEST(ReducedSearch, TheIrradianceAloneIsUpsampledToTheSameBits) {
+  // A later in-frame bounce upsamples its irradiance alone: the same values as the whole
+  // result's, on rough surfaces where some pixels fall back to their nearest texel.
+  ViewGBuffer v = two_planes(23, 11, 9);
+  for (size_t p = 0; p < v.pixels(); ++p) v.position[p].z += 0.01f * float((p * 7) % 5);
+  const ViewGBuffer lo = reduce_view(v, 2);
+  const HorizonImage h = texel_pattern(lo);
+  const HorizonImage whole = upsample_horizon(v, lo, 2, h, 0.05f);
+  const HorizonImage alone = irradiance_of(h);
   const HorizonImage up = upsample_horizon(v, lo, 2, alone, 0.05f);
   EXPECT_TRUE(up.ao.empty() && up.vis.empty() && up.bent.empty());
   ASSERT_EQ(up.irradiance.size(), v.pixels());
@@ -170,20 +181,7 @@ TEST(ReducedSearch, AnUpsamplePlanGivesTheSameBits) {
   for (size_t p : {size_t(5 * 23 + 5), size_t(7 * 23 + 7)}) v.position[p] = v.position[p] * 0.5f;
   for (int f : {2, 3}) {
     const ViewGBuffer lo = reduce_view(v, f);
-    HorizonImage h;
-    h.width = lo.width;
-    h.height = lo.height;
-    for (size_t k = 0; k < lo.pixels(); ++k) {
-      const float a = 0.03f * float(k % 13);
-      h.ao.push_back(a);
-      h.vis.push_back(0.5f * a);
-      h.bent.push_back(Vec3{a, 0, -a});
-      h.irradiance.push_back(Vec3{a, 2 * a, 0.5f - a});
-    }
-    HorizonImage alone;
-    alone.width = h.width;
-    alone.height = h.height;
-    alone.irradiance = h.irradiance;
+    const HorizonImage h = texel_pattern(lo), alone = irradiance_of(h);
     const UpsamplePlan plan = plan_upsample(v, lo, f, 0.05f);
     size_t bilinear = 0, nearest = 0, none = 0;
     for (std::uint32_t c : plan.choice)
