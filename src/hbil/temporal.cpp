@@ -83,7 +83,10 @@ TemporalChain::TemporalChain(Params p)
 void TemporalChain::look_ahead(const GBuffer& g, const Camera& cam, int frame, bool cut,
                                const Camera* before) {
   if (p_.radiance_cache_ahead <= 0) return;
-  const ViewGBuffer v = make_view_gbuffer(g, cam, p_);
+  // The entries take positions alone: no thickness estimated from the extent.
+  Params q = p_;
+  q.thickness_extent = false;
+  const ViewGBuffer v = make_view_gbuffer(g, cam, q);
   if (!cut && before) cut = !camera_cut(*before, cam, median_depth(v), p_).empty();
   cache_.add_ahead(v, cam, g, frame, cut);
 }

@@ -279,7 +279,13 @@ void SequenceJob::run(const Hooks& hooks, Overlap overlap_mode, const SH9* given
       const int a = ahead_[ahead_next];
       if (a <= ahead_last) continue;
       const io::InputFrame in = io::open_frame(plan_.input.path(a), a, p_);
-      GBuffer g = io::read_fields(in, io::fields_needed(in, p_), p_);
+      // Only what the cache's entries and the camera take: the geometry and the direct light.
+      std::vector<std::string> fields;
+      for (const std::string& field : io::fields_needed(in, p_))
+        if (field == "depth" || field == "position" || field == "normal" || field == "alpha" ||
+            field == "diffcol" || field == "diffdir" || field == "emit")
+          fields.push_back(field);
+      GBuffer g = io::read_fields(in, fields, p_);
       const Camera c = io::find_camera(in, g, p_);
       const bool cut = plan_.cuts.count(a) > 0 || (step > 0 && a - ahead_last > step);
       chain->look_ahead(g, c, a, cut, &*ahead_cam);
