@@ -466,6 +466,25 @@ TEST_F(Cli, FramesReadAheadMakeAChunkTheWholeRun) {
   EXPECT_GT(json::parse(r.out)["overall"]["rmse"].get<double>(), 1e-5);
 }
 
+// The frames a chain reads ahead are checked before its first frame: a broken one stops the
+// run, naming it, with nothing written. A run of one frame has no chain and opens none.
+TEST_F(Cli, FramesAheadAreCheckedOnlyWhenAChainReadsThem) {
+  for (int n = 1; n <= 2; ++n) {
+    fs::create_symlink(test::kRoomPoles + "/frame_000" + std::to_string(n) + ".exr",
+                       path("in/frame_000" + std::to_string(n) + ".exr"));
+    fs::create_symlink(test::kRoomPoles + "/frame_000" + std::to_string(n) + ".camera.json",
+                       path("in/frame_000" + std::to_string(n) + ".camera.json"));
+  }
+  test::write_text(path("in/frame_0003.exr"), "not an EXR\n");
+  const std::string in = path("in/frame_####.exr");
+  const std::string ahead = "--no-display -q --set radiance_cache_ahead=2 ";
+  expect_failure(run_args(in, path("out/out_####.exr"), ahead + "--frames 1-2"), Exit::input,
+                 {"frame_0003.exr"});
+  const RunResult one = hbil(run_args(in, path("one/f_####.exr"), ahead + "--frames 1"));
+  EXPECT_EQ(one.code, 0) << one.err;
+  EXPECT_TRUE(fs::exists(path("one/f_0001.exr")));
+}
+
 TEST_F(Cli, CutFramesAreLoggedAndBadListsRefused) {
   const RunResult r = hbil(run_args(test::kRoomPoles + "/frame_####.exr", path("out/f_####.exr"),
                                     "--no-display --frames 1-4 --cut-frames 3"));

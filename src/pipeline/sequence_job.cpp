@@ -122,9 +122,10 @@ SequenceJob::SequenceJob(SequencePlan plan, const Params& requested) : plan_(std
     for (int other : *frames)
       if (other != f) others.push_back(io::open_frame(plan_.input.path(other), other, requested));
   p_ = io::resolve_outputs(first_, requested, &why_dropped_);
-  // The frames read ahead (the gather's radiance cache, with a chain): those after the plan
-  // are checked as its own are.
-  if (p_.radiance_cache_ahead > 0 && gathers(p_) && p_.temporal && plan_.input.is_sequence()) {
+  // The frames read ahead (the gather's radiance cache, with a chain, which a run of one frame
+  // does not have): those after the plan are checked as its own are.
+  if (p_.radiance_cache_ahead > 0 && gathers(p_) && p_.temporal && plan_.input.is_sequence() &&
+      plan_.preroll.size() + plan_.frames.size() > 1) {
     const int begin = plan_.preroll.empty() ? plan_.frames.front() : plan_.preroll.front();
     const int end = plan_.frames.back() + p_.radiance_cache_ahead;
     for (int a : plan_.input.existing_frames()) {
