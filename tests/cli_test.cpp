@@ -469,13 +469,9 @@ TEST_F(Cli, FramesReadAheadMakeAChunkTheWholeRun) {
 // The frames a chain reads ahead are checked before its first frame: a broken one stops the
 // run, naming it, with nothing written. A run of one frame has no chain and opens none.
 TEST_F(Cli, FramesAheadAreCheckedOnlyWhenAChainReadsThem) {
-  for (int n = 1; n <= 2; ++n) {
-    fs::create_symlink(test::kRoomPoles + "/frame_000" + std::to_string(n) + ".exr",
-                       path("in/frame_000" + std::to_string(n) + ".exr"));
-    fs::create_symlink(test::kRoomPoles + "/frame_000" + std::to_string(n) + ".camera.json",
-                       path("in/frame_000" + std::to_string(n) + ".camera.json"));
-  }
-  test::write_text(path("in/frame_0003.exr"), "not an EXR\n");
+  link_frame(1);
+  link_frame(2);
+  test::write_text(in_frame(3), "not an EXR\n");
   const std::string in = path("in/frame_####.exr");
   const std::string ahead = "--no-display -q --set radiance_cache_ahead=2 ";
   expect_failure(run_args(in, path("out/out_####.exr"), ahead + "--frames 1-2"), Exit::input,

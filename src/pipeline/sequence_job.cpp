@@ -124,8 +124,7 @@ SequenceJob::SequenceJob(SequencePlan plan, const Params& requested) : plan_(std
   p_ = io::resolve_outputs(first_, requested, &why_dropped_);
   // The frames read ahead (the gather's radiance cache, with a chain, which a run of one frame
   // does not have): those after the plan are checked as its own are.
-  if (p_.radiance_cache_ahead > 0 && gathers(p_) && p_.temporal && plan_.input.is_sequence() &&
-      plan_.preroll.size() + plan_.frames.size() > 1) {
+  if (p_.radiance_cache_ahead > 0 && gathers(p_) && chained() && plan_.input.is_sequence()) {
     const int begin = plan_.preroll.empty() ? plan_.frames.front() : plan_.preroll.front();
     const int end = plan_.frames.back() + p_.radiance_cache_ahead;
     for (int a : plan_.input.existing_frames()) {
@@ -135,7 +134,7 @@ SequenceJob::SequenceJob(SequencePlan plan, const Params& requested) : plan_(std
     }
   }
   // slices "auto": the chain is decided on the whole plan, as run() decides it.
-  p_ = resolve_auto_slices(p_, p_.temporal && plan_.preroll.size() + plan_.frames.size() > 1);
+  p_ = resolve_auto_slices(p_, chained());
   const io::InputFrame& head = plan_.preroll.empty() ? first_ : others.front();
   auto check = [&](const io::InputFrame& in) {
     io::fields_needed(in, p_);  // exit 4, naming the channels looked for
@@ -206,9 +205,7 @@ void SequenceJob::run(const Hooks& hooks, Overlap overlap_mode, const SH9* given
   // Pre-roll frames first (computed, not delivered), then the frames to deliver.
   std::vector<int> order = plan_.preroll;
   order.insert(order.end(), plan_.frames.begin(), plan_.frames.end());
-  // Whether the run has a temporal chain is decided on the whole plan, done frames included,
-  // so that a resumed run computes what an uninterrupted one does.
-  const bool temporal = p_.temporal && order.size() > 1;
+  const bool temporal = chained();
   if (!done.empty()) {
     // Nothing after the last frame to deliver is needed; without a chain, no done frame is.
     const size_t npre = plan_.preroll.size();

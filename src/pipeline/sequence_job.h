@@ -134,6 +134,10 @@ class SequenceJob {
            const SH9* environment = nullptr, const std::set<int>& done = {}) const;
 
  private:
+  // Whether the run has a temporal chain: decided on the whole plan, pre-roll and done frames
+  // included, so that a resumed run computes what an uninterrupted one does.
+  bool chained() const { return p_.temporal && plan_.preroll.size() + plan_.frames.size() > 1; }
+
   SequencePlan plan_;
   io::InputFrame first_;
   Params p_;
