@@ -126,6 +126,31 @@ TEST(MarchSimd, MatchesScalarWithMeasuredThicknessAndGather) {
   }
 }
 
+// A floor seen almost edge-on, from 4 cm above it, with a wall across it: many rays through
+// the steps graze the samples' surfaces (the cosine under march::kGrazing), where the step
+// keeps the sample's own position instead of moving it onto the ray (march_common.h).
+TEST(MarchSimd, MatchesScalarWhereTheRayGrazesTheSample) {
+  Camera cam = test::look_at(96, 64, 50, {0.0, 2.5, 0.04}, {0.1, 0, 0.02});
+  std::vector<test::HalfPlane> planes = test::v_groove(80 * std::numbers::pi / 180);
+  planes.push_back({{0.3, 0.8, 0}, {-0.9, 0.0, 0.44}, {0, 0, 1}});
+  const GBuffer g = test::ray_cast(cam, planes);
+  Params p;
+  const ViewGBuffer v = make_view_gbuffer(g, cam, p);
+  // The scene must reach the grazing case: texels whose surface the view ray meets under
+  // less than 3 degrees (236 of them).
+  size_t grazing = 0;
+  for (size_t i = 0; i < v.pixels(); ++i) {
+    if (v.is_background(i)) continue;
+    const Vec3 P = v.position[i];
+    if (std::abs(dot(P, v.normal[i])) < 0.05f * std::sqrt(dot(P, P))) ++grazing;
+  }
+  EXPECT_GT(grazing, 150u);
+  std::vector<Vec3> radiance(v.pixels());
+  for (size_t i = 0; i < v.pixels(); ++i) radiance[i] = Vec3{float(i % 7), float(i % 5), 1.f};
+  compare_kernels(v, make_horizon_config(p, cam), &radiance, 2);
+  compare_kernels(v, make_horizon_config(p, cam), nullptr, 3);
+}
+
 // samples/room_poles frame 3 as the search sees it.
 struct Sample {
   GBuffer g;

@@ -46,6 +46,13 @@ std::vector<float> step_fractions(const HorizonConfig& c, float jitter) {
   return f;
 }
 
+std::vector<float> texel_planes(const Vec3* position, const Vec3* normal, size_t count) {
+  // The marches' dot(S, n_s) to the bit: this file is compiled without fused multiply-adds.
+  std::vector<float> plane(count);
+  for (size_t k = 0; k < count; ++k) plane[k] = dot(position[k], normal[k]);
+  return plane;
+}
+
 SliceTerms integrate_slice(float theta0, float theta1, float nx, float ny) {
   // Antiderivatives of f(θ)|sin θ| that vanish at θ = 0 (march::antiderivative): eq. 11, 5
   // and 6 with the |sin θ| Jacobian.

@@ -229,14 +229,21 @@ HWY_INLINE StepLanes TakeStep(DF d, const SampleView& view, int j, int k, VF sx,
       hn::RebindMask(di, m),
       hn::Add(hn::Mul(sj, hn::Set(di, int(view.row))), hn::Mul(si, hn::Set(di, int(view.col)))));
   st.k3 = hn::Mul(st.k_s, hn::Set(di, 3));
-  V3 S = Gather3(d, view.position, st.k3);
   st.n_s = Gather3(d, view.normal, st.k3);
   // f.ray_P + L.dv * (sign * o) * float(view.stride)
   const V3 ray = RayAt(px.ray_P, L.dv, hn::Mul(sign, st.o), hn::Set(d, float(view.stride)));
   const VF denom = Dot(ray, st.n_s);
   const MF steep =
       hn::Gt(hn::Mul(denom, denom), hn::Mul(hn::Set(d, march::kGrazing2), Dot(ray, ray)));
-  st.S = Select(steep, Scale(ray, hn::Div(Dot(S, st.n_s), denom)), S);
+  if (view.plane) {
+    // dot(S, n_s) from the view's table; S itself only where the move does not apply.
+    st.S = Scale(ray, hn::Div(hn::GatherIndex(d, view.plane, st.k_s), denom));
+    if (!hn::AllFalse(d, hn::AndNot(steep, m)))
+      st.S = Select(steep, st.S, Gather3(d, view.position, st.k3));
+  } else {
+    const V3 S = Gather3(d, view.position, st.k3);
+    st.S = Select(steep, Scale(ray, hn::Div(Dot(S, st.n_s), denom)), S);
+  }
   st.d3 = Sub3(st.S, px.P);
   st.dist2 = Dot(st.d3, st.d3);
   st.m = hn::And(m, hn::And(hn::Lt(st.dist2, hn::Set(d, px.rg2)), hn::Gt(st.dist2, zero)));
