@@ -127,6 +127,24 @@ double intersect(const Vec3d& o, const Vec3d& d, Vec3d& normal) {
   return best;
 }
 
+// Whether an imported pixel of the analytic scene is to be compared with the closed form:
+// where the ray misses (t infinite) it must be background, alpha 0 and depth 1e10 (counted in
+// `background`); a hit whose distance along the measured axis reaches `limit` (the plane near
+// its horizon) is not compared; any other hit must be covered (alpha 1).
+bool compared_hit(const float* px, size_t ca, size_t cz, double t, double along, double limit,
+                  int col, int row, int& background) {
+  if (!(along < limit)) {
+    if (!std::isfinite(t)) {
+      EXPECT_EQ(px[ca], 0.0f) << col << "," << row;
+      EXPECT_EQ(px[cz], 1e10f) << col << "," << row;
+      ++background;
+    }
+    return false;
+  }
+  EXPECT_EQ(px[ca], 1.0f) << col << "," << row;
+  return px[ca] == 1.0f;
+}
+
 TEST(PovrayImport, AnalyticSceneDepthNormalsAndCameraAreExact) {
   io::PovrayFrameFiles files;
   files.frame = 1;
@@ -150,15 +168,7 @@ TEST(PovrayImport, AnalyticSceneDepthNormalsAndCameraAreExact) {
       Vec3d n;
       const double t = intersect(pc.location, d, n);
       const double depth = t * dot(d, dir_unit);
-      if (!(depth < 1000)) {  // sky, or the plane near its horizon
-        if (!std::isfinite(t)) {
-          EXPECT_EQ(px[ca], 0.0f) << col << "," << row;
-          EXPECT_EQ(px[cz], 1e10f) << col << "," << row;
-          ++background;
-        }
-        continue;
-      }
-      ASSERT_EQ(px[ca], 1.0f) << col << "," << row;
+      if (!compared_hit(px, ca, cz, t, depth, 1000, col, row, background)) continue;
       max_rel_depth = std::max(max_rel_depth, std::abs(px[cz] - depth) / depth);
       // Towards the camera, in hbil's world.
       if (dot(n, d) > 0) n = -n;
@@ -222,6 +232,14 @@ TEST(PovrayImport, CameraFileErrorsNameTheFileAndKey) {
   far["location"] = {1e300, 0.0, 0.0};
   test::expect_error([&] { io::read_povray_camera(write(far)); }, Exit::camera,
                      {"camera1.json", "\"location\" is out of range"});
+  nlohmann::json pano = j;
+  pano["panorama"] = "yes";
+  test::expect_error([&] { io::read_povray_camera(write(pano)); }, Exit::camera,
+                     {"camera1.json", "\"panorama\" must be true or false"});
+  pano["panorama"] = true;
+  pano["guard"] = {4, 2};
+  test::expect_error([&] { io::read_povray_camera(write(pano)); }, Exit::camera,
+                     {"camera1.json", "a panorama has no guard band"});
   // "format" given twice, the second a number: the last counts, and a number was read as a
   // string, an escaping exception (found by tests/fuzz/fuzz_povray).
   std::string text = j.dump();
@@ -442,6 +460,99 @@ TEST(PovrayImport, RoomSampleDepthAndNormalsMatchItsGeometry) {
 // Pass 8 (render_gbuffer.sh --sky): the sky alone, as an equirectangular image in the
 // mapping hbil's `environment` reads (Blender's, hbil/farfield.h). The sky of
 // tests/data/povray_sky codes its direction as colour; both objects there must be hidden.
+// The analytic scene's panorama (render_gbuffer.sh --panorama: POV-Ray's spherical camera at
+// the camera's location, the depth pass holding the distance from it): each pixel's Position
+// must be where the closed-form scene is hit along the direction the equirectangular mapping
+// gives that pixel, so the camera's orientation, the distance and the importer's mapping all
+// agree. No normal pass and no camera in the file.
+TEST(PovrayImport, PanoramaPositionsAreWhereTheSceneIsHit) {
+  const std::string dir = kAnalytic + "/panorama";
+  io::PovrayFrameFiles files;
+  files.frame = 1;
+  files.camera = dir + "/camera1.json";
+  files.passes = {{"depth", dir + "/depth1.exr"}};
+  const io::PovrayCamera pc = io::read_povray_camera(files.camera);
+  ASSERT_TRUE(pc.panorama);
+  const io::ImportedFrame f = io::import_povray_frame(files);
+  ASSERT_TRUE(f.panorama);
+  ASSERT_EQ(f.width, 64);
+  ASSERT_EQ(f.height, 32);
+  const size_t cz = channel(f, "ViewLayer.Depth.Z"), cp = channel(f, "ViewLayer.Position.X"),
+               ca = channel(f, "ViewLayer.Combined.A");
+  const size_t nc = f.channels.size();
+  for (const std::string& c : f.channels) EXPECT_EQ(c.find("Normal"), std::string::npos) << c;
+  double worst = 0;
+  int compared = 0, background = 0;
+  for (int row = 0; row < f.height; ++row)
+    for (int col = 0; col < f.width; ++col) {
+      const float* px = &f.pixels[(size_t(row) * f.width + col) * nc];
+      const Vec3d w = equirect_to_direction((col + 0.5) / f.width, 1 - (row + 0.5) / f.height);
+      const Vec3d d(w.x, w.z, w.y);  // hbil world -> POV-Ray
+      Vec3d n;
+      const double t = intersect(pc.location, d, n);
+      if (!compared_hit(px, ca, cz, t, t, 200, col, row, background)) continue;
+      EXPECT_NEAR(px[cz], t, 1e-5 * t) << col << "," << row;
+      const Vec3d want = io::pov_to_world(pc.location + t * d);
+      const Vec3d got(px[cp], px[cp + 1], px[cp + 2]);
+      worst = std::max(worst, length(got - want) / t);
+      ++compared;
+    }
+  // The sphere and the plane below the horizon, the sky above it.
+  EXPECT_GT(compared, 700);
+  EXPECT_GT(background, 600);
+  EXPECT_LT(worst, 1e-5);
+  std::cout << "analytic panorama: " << compared << " pixels, max position error " << worst
+            << " of the distance\n";
+}
+
+// The whole path: import-povray turns the analytic scene's passes and its panorama (each given
+// albedo 0.5 and direct light 1) into a frame and a panorama, and `hbil run` lights the frame's
+// empty directions from the panorama: the sphere's underside sees the plane beyond the frame.
+TEST(PovrayImport, APanoramaImportedIsReadByRun) {
+  TempDir dir(test::test_name());
+  auto constant = [](const fs::path& path, int w, int h, float v) {
+    test::write_exr(path.string(), w, h, {"R", "G", "B", "A"},
+                    [&](int, int, int c) { return c < 3 ? v : 1.f; });
+  };
+  fs::create_directories(dir / "frame");
+  fs::create_directories(dir / "pano");
+  for (const char* f : {"depth1.exr", "normal1.exr", "camera1.json"})
+    fs::copy_file(kAnalytic + "/" + f, fs::path(dir / "frame") / f);
+  for (const char* f : {"depth1.exr", "camera1.json"})
+    fs::copy_file(kAnalytic + "/panorama/" + f, fs::path(dir / "pano") / f);
+  constant(dir / "frame/albedo1.exr", 128, 72, 0.5f);
+  constant(dir / "frame/direct1.exr", 128, 72, 1.f);
+  constant(dir / "pano/albedo1.exr", 64, 32, 0.5f);
+  constant(dir / "pano/direct1.exr", 64, 32, 1.f);
+  for (const char* sub : {"frame", "pano"}) {
+    const auto r = test::run_hbil("import-povray " + q(dir / sub) + " -o " +
+                                      q(dir / (std::string("in_") + sub + "/f_####.exr")),
+                                  dir.path());
+    ASSERT_EQ(r.code, 0) << r.err;
+  }
+  const test::Pixels pano = test::read_pixels(dir / "in_pano/f_0001.exr");
+  EXPECT_GE(pano.channel("ViewLayer.Position.X"), 0);
+  EXPECT_LT(pano.channel("ViewLayer.Normal.X"), 0);
+  EXPECT_EQ(pano.spec.find_attribute("worldToCamera"), nullptr);  // no pinhole camera
+  double sum[2] = {0, 0};
+  for (int with = 0; with < 2; ++with) {
+    const std::string out = dir / ("out" + std::to_string(with) + "/f_####.exr");
+    const auto r =
+        test::run_hbil("run -q " + q(dir / "in_frame/f_####.exr") + " -o " + q(out) +
+                           " --no-display --set 'outputs=[\"indirect\"]' --set unseen_radiance=0" +
+                           (with ? " --set 'panorama=\"" + dir / "in_pano/f_####.exr" + "\"'" : ""),
+                       dir.path());
+    ASSERT_EQ(r.code, 0) << r.err;
+    const test::Pixels o = test::read_pixels(dir / ("out" + std::to_string(with) + "/f_0001.exr"));
+    const int c = o.channel("indirect.R");
+    ASSERT_GE(c, 0);
+    for (int y = 0; y < o.spec.height; ++y)
+      for (int x = 0; x < o.spec.width; ++x) sum[with] += o.at(x, y, c);
+  }
+  std::cout << "indirect without and with the panorama: " << sum[0] << ", " << sum[1] << "\n";
+  EXPECT_GT(sum[1], 2 * sum[0]);  // measured 3.6x
+}
+
 TEST(PovraySky, EquirectangularInBlendersMappingWithObjectsHidden) {
   const std::string path = test::kSourceDir + "/tests/data/povray_sky/sky.exr";
   const test::Pixels p = test::read_pixels(path);
@@ -618,6 +729,15 @@ TEST(PovrayImport, ADepthBeyondAFloatIsBadData) {
   const size_t nc = f.channels.size();
   for (size_t i = 0; i < size_t(f.width) * f.height; ++i)
     ASSERT_EQ(f.pixels[i * nc + cb], f.pixels[i * nc + cz]) << i;
+  // A panorama whose location is finite but whose positions are not.
+  nlohmann::json pano =
+      nlohmann::json::parse(test::read_text(kAnalytic + "/panorama/camera1.json"));
+  pano["location"] = {1e39, 0.0, 0.0};
+  test::write_text(dir / "camera1.json", pano.dump());
+  files.camera = dir / "camera1.json";
+  files.passes = {{"depth", kAnalytic + "/panorama/depth1.exr"}};
+  test::expect_error([&] { io::import_povray_frame(files); }, Exit::bad_data,
+                     {"frame 1", "camera1.json", "pixel (", "panorama lies beyond a float"});
 }
 
 // `hbil import-povray -q PASSES [OPTIONS] -o DIR/NAME/frame_####.exr`, which must succeed.

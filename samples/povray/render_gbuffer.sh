@@ -16,6 +16,11 @@
 #     --sky WxH        also render the sky (HBIL_Sky) of the first frame as an equirectangular
 #                      OUTDIR/sky.exr of that size (e.g. 1024x512), for hbil's far field:
 #                      hbil run ... --set 'environment="OUTDIR/sky.exr"'
+#     --panorama WxH   also render each frame's panorama from the camera's location: the
+#                      depth, albedo, emit and direct passes (those --passes asks for) as an
+#                      equirectangular image of that size (e.g. 128x64, W = 2 H), imported as
+#                      OUTDIR/pano_####.exr for hbil's panorama:
+#                      hbil run ... --set 'panorama="OUTDIR/pano_####.exr"'
 #     --passes LIST    comma-separated subset of depth,normal,albedo,emit,direct,backfaces
 #                      (default: all; depth and normal are always rendered)
 #     --hbil PATH      the hbil binary (default: hbil on PATH, else build/hbil of this tree)
@@ -26,9 +31,10 @@
 set -euo pipefail
 kit=$(cd "$(dirname "$0")" && pwd)
 frames=1-1 size=640x360 overscan=0 reference=0 bounces=3 count=1000 hbil="" do_import=1 sky=""
+panorama=""
 passes=depth,normal,albedo,emit,direct,backfaces
 args=()
-usage() { sed -n '2,23p' "$0" | sed 's/^# \{0,1\}//'; exit 2; }
+usage() { sed -n '2,28p' "$0" | sed 's/^# \{0,1\}//'; exit 2; }
 while (($#)); do
   case "$1" in
     --frames) frames=$2; shift 2 ;;
@@ -38,6 +44,7 @@ while (($#)); do
     --bounces) bounces=$2; shift 2 ;;
     --count) count=$2; shift 2 ;;
     --sky) sky=$2; shift 2 ;;
+    --panorama) panorama=$2; shift 2 ;;
     --passes) passes=$2; shift 2 ;;
     --hbil) hbil=$2; shift 2 ;;
     --no-import) do_import=0; shift ;;
@@ -67,6 +74,10 @@ if [[ -n $sky ]]; then
   [[ $sky =~ ^([0-9]+)x([0-9]+)$ && ${BASH_REMATCH[1]} -eq $((2 * ${BASH_REMATCH[2]})) ]] ||
     { echo "render_gbuffer.sh: --sky WxH with W = 2 H, got $sky" >&2; exit 2; }
 fi
+if [[ -n $panorama ]]; then
+  [[ $panorama =~ ^([0-9]+)x([0-9]+)$ && ${BASH_REMATCH[1]} -eq $((2 * ${BASH_REMATCH[2]})) && ${BASH_REMATCH[2]} -ge 2 ]] ||
+    { echo "render_gbuffer.sh: --panorama WxH with W = 2 H, got $panorama" >&2; exit 2; }
+fi
 command -v povray >/dev/null || { echo "render_gbuffer.sh: povray not found (apt-get install povray)" >&2; exit 3; }
 if ((do_import)) && [[ -z $hbil ]]; then
   hbil=$(command -v hbil || true)
@@ -89,21 +100,32 @@ anim=(+KFI"$first" +KFF"$last")
 # A single frame is rendered as frame A of A..A+1, so that POV-Ray still animates: the scene
 # sees frame_number = A (clock 0) and the files carry the frame number.
 ((first == last)) && anim=(+KFI"$first" +KFF"$((last + 1))" +SF"$first" +EF"$first")
-for p in "${list[@]}"; do
-  opts=(+I"$scene" +O"$passdir/$p.exr" +FE +W"$width" +H"$height" -A -D -V
-        Display=off +L"$(dirname "$scene")" +L"$kit" "${anim[@]}" Declare=HBIL_PASS="${number[$p]}"
-        "${guard[@]}")
-  [[ $p == depth ]] && opts+=(+UA)
-  [[ $p == reference ]] && opts+=(Declare=HBIL_Radiosity_Bounces="$bounces" Declare=HBIL_Radiosity_Count="$count")
-  start=$(date +%s.%N)
-  if ! (cd "$passdir" && povray "${opts[@]}") >"$passdir/povray_$p.log" 2>&1; then
-    tail -20 "$passdir/povray_$p.log" >&2
-    echo "render_gbuffer.sh: povray failed on pass $p (log: $passdir/povray_$p.log)" >&2
-    exit 1
-  fi
-  awk -v p="$p" -v n="${number[$p]}" -v f="$((last - first + 1))" -v s="$start" -v e="$(date +%s.%N)" \
-    -v size="${width}x$height" 'BEGIN { printf "render_gbuffer.sh: pass %d %-9s %s, %d frame(s), %.2f s per frame\n", n, p, size, f, (e - s) / f }' >&2
-done
+# render_passes DIR WxH LABEL EXTRA PASS...: renders each PASS over the frames into
+# DIR/<pass><frame>.exr (one run of POV-Ray a pass, its log DIR/povray_<pass>.log), with the
+# declarations in the array named EXTRA, and prints its seconds per frame. LABEL names it in
+# the messages.
+render_passes() {
+  local dir=$1 size=$2 label=$3 p start
+  local -n extra=$4
+  shift 4
+  for p in "$@"; do
+    local opts=(+I"$scene" +O"$dir/$p.exr" +FE +W"${size%x*}" +H"${size#*x}" -A -D -V
+          Display=off +L"$(dirname "$scene")" +L"$kit" "${anim[@]}" Declare=HBIL_PASS="${number[$p]}"
+          "${extra[@]}")
+    [[ $p == depth ]] && opts+=(+UA)
+    [[ $p == reference ]] && opts+=(Declare=HBIL_Radiosity_Bounces="$bounces" Declare=HBIL_Radiosity_Count="$count")
+    start=$(date +%s.%N)
+    if ! (cd "$dir" && povray "${opts[@]}") >"$dir/povray_$p.log" 2>&1; then
+      tail -20 "$dir/povray_$p.log" >&2
+      echo "render_gbuffer.sh: povray failed on $label $p (log: $dir/povray_$p.log)" >&2
+      exit 1
+    fi
+    awk -v l="$label" -v p="$p" -v n="${number[$p]}" -v f="$((last - first + 1))" -v s="$start" \
+      -v e="$(date +%s.%N)" -v size="$size" \
+      'BEGIN { printf "render_gbuffer.sh: %s %d %-9s %s, %d frame(s), %.2f s per frame\n", l, n, p, size, f, (e - s) / f }' >&2
+  done
+}
+render_passes "$passdir" "${width}x$height" pass guard "${list[@]}"
 if [[ -n $sky ]]; then
   # One frame (the first): hbil's environment is one image for the whole run.
   start=$(date +%s.%N)
@@ -120,6 +142,17 @@ if [[ -n $sky ]]; then
   awk -v s="$start" -v e="$(date +%s.%N)" -v size="$sky" -v o="$out/sky.exr" \
     'BEGIN { printf "render_gbuffer.sh: pass 8 sky       %s, %.2f s -> %s\n", size, e - s, o }' >&2
 fi
+if [[ -n $panorama ]]; then
+  # The passes the panorama needs, from the camera's location over the whole sphere.
+  mkdir -p "$passdir/panorama"
+  pano_passes=(depth)
+  for p in albedo emit direct; do [[ ",$passes," == *",$p,"* ]] && pano_passes+=("$p"); done
+  pano_extra=(Declare=HBIL_Panorama=1)
+  render_passes "$passdir/panorama" "$panorama" "panorama pass" pano_extra "${pano_passes[@]}"
+fi
 if ((do_import)); then
   "$hbil" import-povray "$passdir" -o "$out/frame_####.exr" --frames "$first-$last"
+  if [[ -n $panorama ]]; then
+    "$hbil" import-povray "$passdir/panorama" -o "$out/pano_####.exr" --frames "$first-$last"
+  fi
 fi

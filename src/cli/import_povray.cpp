@@ -44,8 +44,10 @@ void write_frame(const std::string& temporary, const io::ImportedFrame& f,
   spec.attribute("compression", "zip");
   spec.attribute("hbil:version", HBIL_VERSION);
   spec.attribute("hbil:source", "POV-Ray passes in " + pass_dir + " (hbil import-povray)");
-  spec.attribute("hbil:camera", io::camera_json(f.camera));
-  io::set_camera_attributes(spec, f.camera);
+  if (!f.panorama) {  // a panorama's pixels are directions: no pinhole camera
+    spec.attribute("hbil:camera", io::camera_json(f.camera));
+    io::set_camera_attributes(spec, f.camera);
+  }
   auto out = OIIO::ImageOutput::create(temporary);
   if (!out || !out->open(temporary, spec) ||
       !out->write_image(OIIO::TypeDesc::FLOAT, f.pixels.data()) || !out->close())
@@ -86,11 +88,13 @@ void import_povray(const ImportOptions& o) {
     batch.expect(out.path(f.frame));
     folders.insert(std::filesystem::path(out.path(f.frame)).parent_path());
   }
+  bool panoramas = false;
   io::install_interrupt_cleanup();
   for (const auto& dir : folders) io::remove_stale_temporaries(dir.empty() ? "." : dir);
   try {
     for (const auto& f : frames) {
       const io::ImportedFrame img = io::import_povray_frame(f, o.view_layer);
+      panoramas = panoramas || img.panorama;
       const std::string final_path = out.path(f.frame);
       const std::string tmp = io::prepare_temporary(final_path, "pov");
       batch.add(tmp, final_path);
@@ -111,9 +115,13 @@ void import_povray(const ImportOptions& o) {
     batch.discard();
     throw;
   }
-  if (!o.quiet)
-    std::cerr << "hbil: imported " << frames.size() << " frame(s); next: hbil run '" << o.out
-              << "' -o <output pattern>\n";
+  if (!o.quiet) {
+    std::cerr << "hbil: imported " << frames.size() << " frame(s); next: ";
+    if (panoramas)
+      std::cerr << "hbil run <shot> -o <output pattern> --set 'panorama=\"" << o.out << "\"'\n";
+    else
+      std::cerr << "hbil run '" << o.out << "' -o <output pattern>\n";
+  }
 }
 
 }  // namespace

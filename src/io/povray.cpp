@@ -13,6 +13,7 @@
 #include <sstream>
 
 #include "hbil/error.h"
+#include "hbil/farfield.h"
 #include "io/camera_io.h"
 #include "io/header_size.h"
 
@@ -118,6 +119,14 @@ PovrayCamera read_povray_camera(const std::string& path) {
                             g.dump());
     c.guard_x = g[0].get<int>();
     c.guard_y = g[1].get<int>();
+  }
+  if (j.contains("panorama")) {
+    if (!j["panorama"].is_boolean())
+      camera_file_error(path,
+                        "key \"panorama\" must be true or false, found " + j["panorama"].dump());
+    c.panorama = j["panorama"].get<bool>();
+    if (c.panorama && (c.guard_x > 0 || c.guard_y > 0))
+      camera_file_error(path, "a panorama has no guard band (keys \"panorama\" and \"guard\")");
   }
   if (!(c.depth_range > 0)) camera_file_error(path, "key \"depth_range\" must be > 0");
   // Squared (as lengths are) without overflowing a double: the camera centre stays finite.
@@ -241,11 +250,11 @@ ImportedFrame import_povray_frame(const PovrayFrameFiles& files, const std::stri
     throw Error(Exit::camera, where_frame + " (" + files.passes.at("depth") + "): no camera" +
                                   std::to_string(frame) +
                                   ".json beside it (hbil.inc writes it in the depth pass)");
-  if (!files.passes.count("normal"))
+  const PovrayCamera pc = read_povray_camera(files.camera);
+  if (!pc.panorama && !files.passes.count("normal"))
     throw Error(Exit::missing_pass, where_frame + " (" + files.passes.at("depth") + "): no normal" +
                                         std::to_string(frame) +
                                         ".exr beside it (pass 2 of render_gbuffer.sh)");
-  const PovrayCamera pc = read_povray_camera(files.camera);
   const int w = pc.width, h = pc.height;
   const size_t n = size_t(w) * h;
 
@@ -254,13 +263,14 @@ ImportedFrame import_povray_frame(const PovrayFrameFiles& files, const std::stri
   out.height = h;
   out.guard_x = pc.guard_x;
   out.guard_y = pc.guard_y;
-  out.camera = camera_from_povray(pc, "POV-Ray " + fs::path(files.camera).filename().string());
+  out.panorama = pc.panorama;
+  if (!pc.panorama)
+    out.camera = camera_from_povray(pc, "POV-Ray " + fs::path(files.camera).filename().string());
 
   auto read = [&](const std::string& pass, int min_channels) {
     return read_pass(files.passes.at(pass), frame, pass, min_channels, w, h);
   };
   const PassImage depth = read("depth", 4);
-  const PassImage normal = read("normal", 3);
 
   // Each layer as planar float data first; interleaved at the end.
   std::deque<std::pair<std::string, std::vector<float>>> planes;  // references stay valid
@@ -293,7 +303,31 @@ ImportedFrame import_povray_frame(const PovrayFrameFiles& files, const std::stri
   }
   add(L + "Depth.Z") = z;
   out.layers.push_back("Depth");
-  {
+  if (pc.panorama) {
+    // Where each pixel looks: the equirectangular directions of `environment`
+    // (equirect_to_direction), from the camera's location in hbil's world.
+    auto& px = add(L + "Position.X");
+    auto& py = add(L + "Position.Y");
+    auto& pz = add(L + "Position.Z");
+    const Vec3d o = pov_to_world(pc.location);
+    for (int row = 0; row < h; ++row)
+      for (int col = 0; col < w; ++col) {
+        const size_t i = size_t(row) * w + col;
+        if (!hit[i]) continue;
+        const Vec3d d = equirect_to_direction((col + 0.5) / w, 1.0 - (row + 0.5) / h);
+        const Vec3d p = o + d * double(z[i]);
+        px[i] = float(p.x);
+        py[i] = float(p.y);
+        pz[i] = float(p.z);
+        if (!std::isfinite(px[i] + py[i] + pz[i]))
+          throw Error(Exit::bad_data, where_frame + " (" + files.camera + "): pixel (" +
+                                          std::to_string(col) + ", " + std::to_string(row) +
+                                          ") of the panorama lies beyond a float (its location "
+                                          "plus its distance)");
+      }
+    out.layers.push_back("Position");
+  } else {
+    const PassImage normal = read("normal", 3);
     auto& nx = add(L + "Normal.X");
     auto& ny = add(L + "Normal.Y");
     auto& nz = add(L + "Normal.Z");

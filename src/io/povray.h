@@ -42,6 +42,9 @@ struct PovrayCamera {
   int guard_x = 0, guard_y = 0;
   double depth_range = 0;
   Vec3d location, direction, right, up;
+  // A panorama (render_gbuffer.sh --panorama): the passes are an equirectangular image from
+  // `location` over the whole sphere, and the depth pass holds the distance from it.
+  bool panorama = false;
 };
 // Throws Error(Exit::input) when the file cannot be read, Error(Exit::camera) for a bad
 // format, missing key, or a camera that is not an orthogonal perspective camera with square
@@ -76,8 +79,9 @@ struct ImportedFrame {
   int width = 0, height = 0;
   int guard_x = 0, guard_y = 0;  // the camera file's: the EXR's data window starts at -guard
   std::vector<std::string> channels;
-  std::vector<float> pixels;  // interleaved, rows top-down
-  Camera camera;
+  std::vector<float> pixels;        // interleaved, rows top-down
+  Camera camera;                    // not set for a panorama
+  bool panorama = false;            // PovrayCamera::panorama
   std::vector<std::string> layers;  // pass names written, for the log
 };
 // Reads and converts the passes of one frame: depth, normal and the camera are required
@@ -89,6 +93,13 @@ struct ImportedFrame {
 //   DiffInd = (Combined - DiffCol * DiffDir - Emit - Env) / DiffCol (0 where DiffCol is 0,
 //   as Cycles divides its light passes), and BackFaces.Depth.Z in the view layer
 //   "BackFaces" (1e10 where the ray leaves through no back face).
+// A panorama's camera file (PovrayCamera::panorama) makes the frame a panorama for hbil's
+// `panorama` key: Position.X/Y/Z (world) and Depth.Z (the distance from the camera's
+// location; 1e10 on the background) from the depth pass along the directions of the
+// equirectangular image (equirect_to_direction, the convention of `environment`: the centre
+// column looks along +X, a quarter to its left along +Y, the top row at the zenith),
+// Combined.A, DiffCol, DiffDir, Emit and Env as above; no normal pass is needed, and no camera
+// is written.
 ImportedFrame import_povray_frame(const PovrayFrameFiles& files,
                                   const std::string& view_layer = "ViewLayer");
 

@@ -3,7 +3,11 @@
 // normals and camera against them. Rendered (128x72, depth and normal passes) with
 //   samples/povray/render_gbuffer.sh --size 128x72 --passes depth,normal --no-import \
 //     tests/data/povray_analytic/analytic.pov /tmp/analytic
-// and the passes and camera1.json copied here.
+// and the passes and camera1.json copied here. Its panorama (panorama/: the distance from the
+// camera's location over the whole sphere, 64x32) with
+//   samples/povray/render_gbuffer.sh --size 128x72 --passes depth,normal --panorama 64x32 \
+//     --no-import tests/data/povray_analytic/analytic.pov /tmp/analytic
+// and passes/panorama/depth1.exr and camera1.json copied to panorama/.
 #version 3.7;
 #include "hbil.inc"
 HBIL_Camera(<0.3, 1.5, -4>, <0, 1, 0>, 60)
