@@ -457,9 +457,6 @@ TEST(PovrayImport, RoomSampleDepthAndNormalsMatchItsGeometry) {
   EXPECT_LT(max_angle * 180 / 3.14159265358979, 0.07);
 }
 
-// Pass 8 (render_gbuffer.sh --sky): the sky alone, as an equirectangular image in the
-// mapping hbil's `environment` reads (Blender's, hbil/farfield.h). The sky of
-// tests/data/povray_sky codes its direction as colour; both objects there must be hidden.
 // The analytic scene's panorama (render_gbuffer.sh --panorama: POV-Ray's spherical camera at
 // the camera's location, the depth pass holding the distance from it): each pixel's Position
 // must be where the closed-form scene is hit along the direction the equirectangular mapping
@@ -553,6 +550,9 @@ TEST(PovrayImport, APanoramaImportedIsReadByRun) {
   EXPECT_GT(sum[1], 2 * sum[0]);  // measured 3.6x
 }
 
+// Pass 8 (render_gbuffer.sh --sky): the sky alone, as an equirectangular image in the
+// mapping hbil's `environment` reads (Blender's, hbil/farfield.h). The sky of
+// tests/data/povray_sky codes its direction as colour; both objects there must be hidden.
 TEST(PovraySky, EquirectangularInBlendersMappingWithObjectsHidden) {
   const std::string path = test::kSourceDir + "/tests/data/povray_sky/sky.exr";
   const test::Pixels p = test::read_pixels(path);

@@ -319,7 +319,7 @@ ImportedFrame import_povray_frame(const PovrayFrameFiles& files, const std::stri
         px[i] = float(p.x);
         py[i] = float(p.y);
         pz[i] = float(p.z);
-        if (!std::isfinite(px[i] + py[i] + pz[i]))
+        if (!std::isfinite(px[i]) || !std::isfinite(py[i]) || !std::isfinite(pz[i]))
           throw Error(Exit::bad_data, where_frame + " (" + files.camera + "): pixel (" +
                                           std::to_string(col) + ", " + std::to_string(row) +
                                           ") of the panorama lies beyond a float (its location "
