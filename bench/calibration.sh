@@ -17,6 +17,8 @@
 # non-background pixels of all frames, and s/frame (the calibration's solve included; the
 # calibration render's own time is not).
 #   OUT=/tmp/cal bench/calibration.sh ...   keep each bench's folder there
+#   TILES=1 bench/calibration.sh ...   each calibrated configuration also with one factor per
+#       calibration frame (`calibration_tiles` 0) beside the default tiles
 #   EMISSION=1 RUNS=1 bench/calibration.sh ...   instead, the Emit pass gathered as light or
 #       not (`emission`; README "Emitting surfaces"): the default preset with `emission`
 #       "gathered" and with its default "auto", and presets/interior.json with `calibration`,
@@ -63,6 +65,12 @@ for arg in "$@"; do
     echo "{\"calibration\": \"$cal\"}" > "$p/calibrated.json"
     echo "{\"unseen_carry\": true, \"calibration\": \"$cal\"}" > "$p/interior_calibrated.json"
     configs=(calibrated interior_calibrated)
+    if [ -n "${TILES:-}" ]; then
+      echo "{\"calibration\": \"$cal\", \"calibration_tiles\": 0}" > "$p/calibrated_one.json"
+      echo "{\"unseen_carry\": true, \"calibration\": \"$cal\", \"calibration_tiles\": 0}" \
+        > "$p/interior_calibrated_one.json"
+      configs=(calibrated_one calibrated interior_calibrated_one interior_calibrated)
+    fi
   fi
   presets=()
   [ -n "${EMISSION:-}" ] || presets=(--preset presets/default.json --preset presets/interior.json)
@@ -86,6 +94,8 @@ PY
       --label "default=default | none" --label "interior=interior | none" \
       --label "calibrated=default | $(basename "$cal")" \
       --label "interior_calibrated=interior | $(basename "$cal")" \
+      --label "calibrated_one=default | $(basename "$cal"), one factor" \
+      --label "interior_calibrated_one=interior | $(basename "$cal"), one factor" \
       indirect:rmp composite:rmp s
   fi
 done

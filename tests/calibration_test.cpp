@@ -256,6 +256,162 @@ TEST(Calibration, WithTwoBouncesTheSecantIsIterated) {
   EXPECT_NEAR(indirect_mean(q, c.scale) / c.reference, 1.0, 1e-3);
 }
 
+// hbil's `indirect` on what the calibration computes (frame 1, the centre pixel of every 2 x 2
+// block), at unseen_scale s, through compute_ao_frame.
+AoFrame small_frame(Params p, double s) {
+  p.unseen_scale = s;
+  p.search_scale = 1;
+  p.temporal = false;
+  const io::FramePattern shot(kShot);
+  const io::InputFrame in = io::open_frame(shot.path(1), 1, p);
+  GBuffer g = io::read_fields(in, io::fields_needed(in, p), p);
+  const Camera cam = io::find_camera(in, g, p);
+  const auto small = pipeline::subsample(g, cam, 2);
+  return compute_ao_frame(small.first, small.second, p);
+}
+
+// Per tile (Params::calibration_tiles), 4 columns: 4 x 2 tiles of 32 x 36 pixels, which a
+// render of 128 x 72 (at most one tile per 256 of its pixels) allows. The renders are made at
+// the computed pixels' resolution (DiffCol 1) from hbil's own indirect light at the fill's level
+// 2.5, each pixel the mean of its tile (a render without noise):
+//  - as it is, every tile takes the frame's factor;
+//  - twice as bright on its right half, the left half's tiles keep 2.5 and the right half's
+//    take the level at which each has the render's mean, to 1e-3 (one bounce, no history:
+//    linear);
+//  - as it is, each pixel off by +-60 % (a noisy render of the same light), the tiles' means
+//    are off by a few per cent, which the noise explains: each factor is drawn to the frame's.
+TEST(Calibration, EachTileTakesTheLevelOfItsOwnMean) {
+  test::TempDir dir(test::test_name());
+  const io::FramePattern shot(kShot);
+  write_calibration(dir / "probe.exr", 0.1f);
+  const Params p = resolved(dir / "probe.exr");
+  ASSERT_EQ(p.calibration_tiles, 8);
+  const AoFrame lo = small_frame(p, 0.0), hi = small_frame(p, 2.5);
+  const int W = lo.width, H = lo.height, cols = 4, rows = 2;
+  ASSERT_EQ(W, 128);
+  ASSERT_EQ(H, 72);
+  auto tile = [&](int x, int y) { return size_t(y * rows / H) * cols + size_t(x * cols / W); };
+  auto sum3 = [](const Vec3& e) { return double(e.x) + e.y + e.z; };
+  std::vector<Vec3d> mean(size_t(cols * rows));
+  std::vector<double> l(mean.size()), h(mean.size());
+  for (int y = 0; y < H; ++y)
+    for (int x = 0; x < W; ++x) {
+      const size_t i = size_t(y) * size_t(W) + size_t(x), t = tile(x, y);
+      mean[t] += Vec3d(hi.indirect[i]) / double(32 * 36);
+      l[t] += sum3(lo.indirect[i]) / (32 * 36);
+      h[t] += sum3(hi.indirect[i]) / (32 * 36);
+    }
+  // +-1 by pixel from a fixed hash: white noise, whose mean over a tile is a few per cent off.
+  auto sign = [](int x, int y) {
+    uint32_t k = uint32_t(x) * 73856093u ^ uint32_t(y) * 19349663u;
+    k ^= k >> 13, k *= 0x5bd1e995u, k ^= k >> 15;
+    return k & 1u ? 1.0 : -1.0;
+  };
+  const std::vector<std::string> ch = {"ViewLayer.DiffCol.R", "ViewLayer.DiffCol.G",
+                                       "ViewLayer.DiffCol.B", "ViewLayer.DiffInd.R",
+                                       "ViewLayer.DiffInd.G", "ViewLayer.DiffInd.B"};
+  std::vector<double> written(mean.size());  // each tile's mean as written, R + G + B
+  auto write = [&](const std::string& path, double right, double noise) {
+    std::fill(written.begin(), written.end(), 0.0);
+    test::write_exr(path, W, H, ch, [&](int x, int y, int c) {
+      if (c < 3) return 1.f;
+      const Vec3d e = mean[tile(x, y)];
+      const float v = float((c == 3   ? e.x
+                             : c == 4 ? e.y
+                                      : e.z) *
+                            (x >= W / 2 ? right : 1.0) * (1 + noise * sign(x, y)));
+      written[tile(x, y)] += double(v) / (32 * 36);
+      return v;
+    });
+  };
+  auto solve = [&](const std::string& path) {
+    Params q = resolved(path);
+    q.calibration_tiles = cols;
+    const CalibrationPoint c = Calibration(q, shot, {1}).solve(q, shot).at(0);
+    EXPECT_EQ(c.tiles.cols, cols);
+    EXPECT_EQ(c.tiles.rows, rows);  // 4 x 72 / 128 = 2.25, rounded
+    EXPECT_EQ(c.tiles.factor.size(), mean.size());
+    return c;
+  };
+  write(dir / "same.exr", 1.0, 0.0);
+  const CalibrationPoint same = solve(dir / "same.exr");
+  EXPECT_NEAR(same.scale, 2.5, 1e-3);
+  for (float r : same.tiles.factor) EXPECT_NEAR(r, 1.0, 1e-3);
+
+  write(dir / "right.exr", 2.0, 0.0);
+  const CalibrationPoint c = solve(dir / "right.exr");
+  EXPECT_GT(c.scale, 2.6);
+  for (size_t t = 0; t < mean.size() && t < c.tiles.factor.size(); ++t) {
+    const double r = c.tiles.factor[t], s_t = 2.5 * (written[t] - l[t]) / (h[t] - l[t]);
+    ASSERT_GT((h[t] - l[t]) / 2.5, pipeline::kTileReach * (c.with - c.without)) << t;
+    EXPECT_NEAR(r * c.scale / s_t, 1.0, 1e-3) << "tile " << t;
+    if (t % cols < size_t(cols / 2)) EXPECT_NEAR(r * c.scale, 2.5, 2.5e-3) << "tile " << t;
+  }
+  // 8 columns ask for 40 tiles, more than the render's 36 of 256 pixels: 7 x 4.
+  Params b = resolved(dir / "right.exr");
+  EXPECT_EQ(Calibration(b, shot, {1}).solve(b, shot).at(0).tiles.cols, 7);
+
+  write(dir / "noisy.exr", 1.0, 0.6);
+  const CalibrationPoint n = solve(dir / "noisy.exr");
+  double raw_off = 0, off = 0;
+  for (size_t t = 0; t < mean.size() && t < n.tiles.factor.size(); ++t) {
+    const double raw = 2.5 * (written[t] - l[t]) / (h[t] - l[t]) / n.scale;
+    raw_off = std::max(raw_off, std::abs(raw - 1));
+    off = std::max(off, std::abs(double(n.tiles.factor[t]) - 1));
+  }
+  EXPECT_GT(raw_off, 0.01);     // the noise moves the tiles' means
+  EXPECT_LT(off, raw_off / 4);  // and the factors hardly
+}
+
+// The factor at a surface: its tile's seen from the calibration frame's camera, bilinear
+// between tile centres, the views weighted, 1 where none sees it.
+TEST(Calibration, ASurfaceTakesTheFactorOfItsTile) {
+  FillTiles::View v;
+  v.cam.width = 40, v.cam.height = 20;
+  v.cam.fx = v.cam.fy = 20, v.cam.cx = 20, v.cam.cy = 10;  // identity pose: view = world
+  v.w = 40, v.h = 20, v.cols = 4, v.rows = 2;
+  v.factor = {1, 2, 3, 4, 5, 6, 7, 8};
+  FillTiles t;
+  t.views = {v};
+  // Raster (u, r) at depth 1 is world ((u - 20) / 20, (r - 10) / 20, 1).
+  auto at = [&](double u, double r) { return t.at(Vec3d((u - 20) / 20, (r - 10) / 20, 1)); };
+  EXPECT_FLOAT_EQ(at(5, 5), 1.f);               // tile (0, 0)'s centre
+  EXPECT_FLOAT_EQ(at(35, 15), 8.f);             // tile (3, 1)'s centre
+  EXPECT_FLOAT_EQ(at(10, 5), 1.5f);             // half way to tile (1, 0)
+  EXPECT_FLOAT_EQ(at(10, 10), 3.5f);            // and to the row below: (1 + 2 + 5 + 6) / 4
+  EXPECT_FLOAT_EQ(at(1, 1), 1.f);               // beyond the outer centres: clamped
+  EXPECT_FLOAT_EQ(at(41, 5), 1.f);              // outside the frame: no view sees it
+  EXPECT_FLOAT_EQ(t.at(Vec3d(0, 0, -1)), 1.f);  // behind the camera
+  // A second view, weighted 3 to the first's 1, that sees every point with factor 2.
+  FillTiles::View w = v;
+  w.factor.assign(8, 2.f);
+  t.views[0].weight = 1;
+  w.weight = 3;
+  t.views.push_back(w);
+  EXPECT_FLOAT_EQ(at(35, 15), (8.f + 3 * 2.f) / 4);
+  EXPECT_FLOAT_EQ(at(41, 5), 1.f);
+}
+
+// Frame f's tiles are those of the calibration frames around it, weighted as its factor.
+TEST(Calibration, FramesBetweenCalibrationFramesWeighTheirTiles) {
+  std::vector<CalibrationPoint> pts(2);
+  pts[0].frame = 2, pts[1].frame = 6;
+  for (CalibrationPoint& q : pts) q.tiles.cols = q.tiles.rows = 1, q.tiles.factor = {1};
+  auto weights = [&](int f) {
+    std::vector<double> w;
+    for (const FillTiles::View& v : Calibration::tiles_at(pts, f).views) w.push_back(v.weight);
+    return w;
+  };
+  using W = std::vector<double>;
+  EXPECT_EQ(weights(1), W{1.0});
+  EXPECT_EQ(weights(3), (W{0.75, 0.25}));
+  EXPECT_EQ(weights(6), W{1.0});
+  EXPECT_EQ(weights(9), W{1.0});
+  pts[1].tiles.cols = 0;  // a point without tiles (the fill reached nothing there)
+  EXPECT_EQ(weights(3), W{0.75});
+  EXPECT_TRUE(Calibration::tiles_at({}, 1).empty());
+}
+
 // A render darker than hbil's indirect light without any fill: the factor stops at 0.
 TEST(Calibration, TheFactorIsClampedAtZero) {
   test::TempDir dir(test::test_name());

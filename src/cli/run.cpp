@@ -3,6 +3,7 @@
 #include <tbb/info.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <ctime>
@@ -277,14 +278,21 @@ void run_frames(const RunOptions& o, io::RunLog& log, int& written) {
                               {"mean_without_fill", c.without},
                               {"mean_with_fill", c.with},
                               {"unseen_scale", c.scale},
+                              {"tiles", {c.tiles.cols, c.tiles.rows}},
+                              {"tile_factors", c.tiles.factor},
                               {"seconds", c.seconds}});
     if (o.quiet) return;
-    char line[512];
+    char line[512], tiles[128] = "";
+    if (c.tiles.cols > 0) {
+      const auto [lo, hi] = std::minmax_element(c.tiles.factor.begin(), c.tiles.factor.end());
+      std::snprintf(tiles, sizeof tiles, "; %d x %d tiles, %.2f-%.2f x", c.tiles.cols, c.tiles.rows,
+                    double(*lo), double(*hi));
+    }
     if (c.reaches)
       std::snprintf(line, sizeof line,
                     "hbil: calibration, frame %d: unseen_scale %.3f (mean DiffCol x DiffInd "
-                    "%.5f; hbil's indirect %.5f without the fill, %.5f with it), %.3f s\n",
-                    c.frame, c.scale, c.reference, c.without, c.with, c.seconds);
+                    "%.5f; hbil's indirect %.5f without the fill, %.5f with it%s), %.3f s\n",
+                    c.frame, c.scale, c.reference, c.without, c.with, tiles, c.seconds);
     else
       std::snprintf(line, sizeof line,
                     "hbil: calibration, frame %d: the fill reaches no pixel, unseen_scale 1 "

@@ -37,8 +37,10 @@ Vec3 diffuse_weight(const GBuffer& g, size_t i) {
 }
 
 AoFrame compute_ao_frame(const GBuffer& g, const Camera& cam, const Params& p,
-                         const SH9* environment, const RadianceCache* cache, int frame) {
-  return compute_ao_frame(make_view_gbuffer(g, cam, p), g, cam, p, environment, cache, frame);
+                         const SH9* environment, const RadianceCache* cache, int frame,
+                         const FillTiles* tiles) {
+  return compute_ao_frame(make_view_gbuffer(g, cam, p), g, cam, p, environment, cache, frame,
+                          tiles);
 }
 
 Params resolve_frame_outputs(const GBuffer& g, const Params& requested) {
@@ -53,11 +55,12 @@ bool gathers(const Params& p) {
 
 AoFrame compute_ao_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& cam,
                          const Params& requested, const SH9* environment,
-                         const RadianceCache* cache, int frame) {
+                         const RadianceCache* cache, int frame, const FillTiles* tiles) {
   const Params p = resolve_frame_outputs(g, requested);
   FrameInputs in;
   in.cache = cache;
   in.frame = frame;
+  in.tiles = tiles;
   return assemble_frame(v, g, cam, p, search_frame(v, g, cam, p, std::move(in)), environment);
 }
 
@@ -183,6 +186,19 @@ HorizonImage search_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& 
       fill_map = unseen_fill_map(sv, escape_profile(v, cam, p.unseen_carry), c.fill);
       c.fill_map = fill_map.data();
     }
+  }
+  if (gather && in.tiles && !in.tiles->empty()) {
+    // The calibrated level of each searched pixel's surface (fill_tiles.h), on the fill it
+    // has without a cache, so that what a cache or a panorama knows stays as they show it.
+    if (fill_map.empty()) fill_map.assign(sv.pixels(), c.fill);
+    tbb::parallel_for(0, sv.height, [&](int y) {
+      for (int x = 0; x < sv.width; ++x) {
+        const size_t i = size_t(y) * size_t(sv.width) + size_t(x);
+        if (sv.is_background(i)) continue;
+        fill_map[i] = fill_map[i] * in.tiles->at(cam.view_to_world(Vec3d(sv.position[i])));
+      }
+    });
+    c.fill_map = fill_map.data();
   }
   if (cached && !fill_map.empty()) {  // each pixel's own fill where the cache knows nothing
     fill_map = in.cache->fill_map(sv, cam, in.frame, fill_map);

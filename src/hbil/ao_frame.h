@@ -7,6 +7,7 @@
 
 #include "hbil/camera.h"
 #include "hbil/farfield.h"
+#include "hbil/fill_tiles.h"
 #include "hbil/gbuffer.h"
 #include "hbil/interleave.h"
 #include "hbil/params.h"
@@ -44,9 +45,10 @@ Vec3 diffuse_weight(const GBuffer& g, size_t i);
 // background) and cone_cos = 0 (a full hemisphere).
 // `environment` (SH of the far field, world space) is needed by the farfield output.
 // `cache`: what lies off screen (a panorama of frame `frame`; radiance_cache.h), or null.
+// `tiles`: the fill's level per surface (FrameInputs::tiles), or null.
 AoFrame compute_ao_frame(const GBuffer& g, const Camera& cam, const Params& p,
                          const SH9* environment = nullptr, const RadianceCache* cache = nullptr,
-                         int frame = 0);
+                         int frame = 0, const FillTiles* tiles = nullptr);
 
 // The two halves of compute_ao_frame, for the temporal chain (temporal.h), which blends the
 // search's result with its history in between. `p` has its outputs resolved
@@ -65,6 +67,9 @@ struct FrameInputs {
   // of the same view with the same parameters but for unseen_scale, the feedback and the
   // bounce (calibration.cpp solves the fill's level with it); the bitmask method, interleaved.
   GatherRecord* record = nullptr;
+  // A calibrated fill level per surface (fill_tiles.h), or null: each searched pixel's fill
+  // is multiplied by its factor at the pixel's world position.
+  const FillTiles* tiles = nullptr;
 };
 Params resolve_frame_outputs(const GBuffer& g, const Params& requested);
 // unseen_radiance "auto" = auto_unseen_factor(unseen_carry) x the mean over the frame's
@@ -106,6 +111,6 @@ AoFrame assemble_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& cam
 // `g` supplies the world normals and, for irradiance, the colour fields.
 AoFrame compute_ao_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& cam, const Params& p,
                          const SH9* environment = nullptr, const RadianceCache* cache = nullptr,
-                         int frame = 0);
+                         int frame = 0, const FillTiles* tiles = nullptr);
 
 }  // namespace hbil

@@ -104,6 +104,11 @@ const std::vector<ParamInfo>& params_table() {
       {"unseen_scale", &Params::unseen_scale, 0, 1e3, "factor",
        "unseen_radiance (auto or a number) is multiplied by this; with calibration, the factor "
        "is solved at each calibration frame instead (and interpolated between them)"},
+      {"calibration_tiles", &Params::calibration_tiles, 0, 64, "columns",
+       "with calibration: the fill's level is solved in a grid of this many columns of tiles "
+       "(rows in proportion, at most one tile per 256 pixels of the render) over each "
+       "calibration frame as well, and each surface takes its tile's factor where a "
+       "calibration frame sees it; 0: one factor per calibration frame"},
       {"bounces", &Params::bounces, 1, 16, "count",
        "in-frame bounces of indirect light: bounce k gathers the outgoing radiance of bounce k-1"},
       {"ao_multibounce", &Params::ao_multibounce, 0, 1, "bool",

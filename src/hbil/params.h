@@ -73,6 +73,12 @@ struct Params {
   // resolution, of some of the shot's frames (DiffCol and DiffInd): at each, unseen_scale is
   // the factor that gives hbil's single-frame indirect light the render's mean; "" (off).
   std::string calibration;
+  // With `calibration`: the columns of a grid of tiles over each calibration frame, in each of
+  // which the fill's level is solved as well (rows in proportion, at most one tile per 256 of the
+  // render's pixels), relative to the frame's factor; the factor of a surface is its tile's,
+  // bilinear between tile centres, where a calibration frame sees it (pipeline/calibration.h,
+  // hbil/fill_tiles.h). 0: one factor per calibration frame.
+  int calibration_tiles = 8;
   std::string environment;  // far field: "" (off), equirect EXR path, or "rgb:r,g,b"
   // A frame pattern of panoramic G-buffers from each frame's camera position (Position,
   // DiffCol, DiffDir, Emit, Depth), whose off-screen part lights the gather's empty

@@ -182,6 +182,7 @@ AoFrame TemporalChain::run(const GBuffer& g, GBuffer* release, const Camera& cam
   in.rotate = true;
   in.frame = frame;
   if (reads_cache) in.cache = &cache_;
+  in.tiles = tiles_;
   std::vector<Vec3>& feedback = in.feedback;
   if (history && gather && p_.feedback) {
     std::vector<float> e(3 * n_px), depth(n_px);

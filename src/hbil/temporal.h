@@ -87,6 +87,9 @@ class TemporalChain {
   void look_ahead(const GBuffer& g, const Camera& cam, int frame, bool cut, const Camera* before);
   // Params::unseen_scale for the frames processed next (a calibrated level per frame).
   void set_unseen_scale(double s) { p_.unseen_scale = s; }
+  // The calibrated fill level per surface for the frames processed next (FrameInputs::tiles),
+  // or null; the caller keeps it alive while they are processed.
+  void set_fill_tiles(const FillTiles* tiles) { tiles_ = tiles; }
 
   // Per-pixel history channels: irradiance (3, only when the outputs gather light), ao, vis,
   // bent vector in world space (3), n; with history_window, two such groups (the chains) and,
@@ -105,7 +108,8 @@ class TemporalChain {
   Camera cam_;               // and camera
   int frame_ = 0;            // and frame number
   std::vector<float> data_;  // the history channels per pixel (see above)
-  RadianceCache cache_;      // what the last frames (and those ahead) showed
+  const FillTiles* tiles_ = nullptr;
+  RadianceCache cache_;  // what the last frames (and those ahead) showed
 };
 
 }  // namespace hbil

@@ -38,6 +38,52 @@ double indirect_mean(const ViewGBuffer& v, const GBuffer& g, const HorizonImage&
   return n ? sum / double(n) : 0.0;
 }
 
+// Sums of DiffCol x the search's irradiance (R + G + B) per tile of a cols x rows grid over
+// g's display window, and the pixels of each (background adds 0 and counts).
+void indirect_tiles(const ViewGBuffer& v, const GBuffer& g, const HorizonImage& h, int cols,
+                    int rows, std::vector<double>& sums, std::vector<size_t>& counts) {
+  sums.assign(size_t(cols) * size_t(rows), 0.0);
+  counts.assign(sums.size(), 0);
+  const int x0 = g.display_width > 0 ? g.display_x : 0, y0 = g.display_width > 0 ? g.display_y : 0;
+  const int w = g.display_width > 0 ? g.display_width : g.width,
+            hh = g.display_width > 0 ? g.display_height : g.height;
+  for (int y = 0; y < g.height; ++y)
+    for (int x = 0; x < g.width; ++x) {
+      if (!g.in_display(x, y)) continue;
+      const int tx = std::min(cols - 1, (x - x0) * cols / w),
+                ty = std::min(rows - 1, (y - y0) * rows / hh);
+      const size_t t = size_t(ty) * size_t(cols) + size_t(tx);
+      ++counts[t];
+      const size_t i = size_t(y) * size_t(g.width) + size_t(x);
+      if (v.is_background(i)) continue;
+      const Vec3 a = g.diffcol[i], e = h.irradiance[i];
+      sums[t] += double(a.x) * e.x + double(a.y) * e.y + double(a.z) * e.z;
+    }
+}
+
+// The pixels of the render's data window inside its display window (its header alone).
+double reference_pixels(const std::string& path) {
+  io::ImageFile im(path);
+  const OIIO::ImageSpec& sp = im.spec();
+  const int64_t w = std::min(sp.x + sp.width, sp.full_x + sp.full_width) -
+                    std::max(sp.x, sp.full_x),
+                h = std::min(sp.y + sp.height, sp.full_y + sp.full_height) -
+                    std::max(sp.y, sp.full_y);
+  return double(std::max<int64_t>(w, 0)) * double(std::max<int64_t>(h, 0));
+}
+
+// The grid of Params::calibration_tiles over a frame of w x h pixels computed and a render of
+// `ref_pixels`: cols x rows with rows in proportion, at most one tile per 256 pixels of the
+// render and per 64 of those computed. {0, 0}: off.
+std::pair<int, int> tile_grid(int tiles, int w, int h, double ref_pixels) {
+  for (int cols = tiles; cols >= 1; --cols) {
+    const int rows = std::max(1, int(std::lround(double(cols) * h / std::max(w, 1))));
+    const double n = double(cols) * rows;
+    if (n * 256 <= ref_pixels && n * 64 <= double(w) * h) return {cols, rows};
+  }
+  return {0, 0};
+}
+
 // Frame c's point from its frame g (as the run reads it, colour packed or not) and camera.
 CalibrationPoint solve_frame(const Params& p, const GBuffer& full, const Camera& full_cam, int c,
                              const std::string& path) {
@@ -45,11 +91,21 @@ CalibrationPoint solve_frame(const Params& p, const GBuffer& full, const Camera&
   CalibrationPoint pt;
   pt.frame = c;
   pt.path = path;
-  pt.reference = reference_indirect_mean(path);
+  // The grid of Params::calibration_tiles over the frame as computed (below), and the
+  // render's mean over it and over each tile, in one reading.
+  const int m = 2 * effective_search_scale(p, full.width, full.height);
+  const int dw = std::max(1, (full.display_width > 0 ? full.display_width : full.width) / m),
+            dh = std::max(1, (full.display_width > 0 ? full.display_height : full.height) / m);
+  const std::pair<int, int> grid =
+      p.calibration_tiles > 0 ? tile_grid(p.calibration_tiles, dw, dh, reference_pixels(path))
+                              : std::pair<int, int>{0, 0};
+  std::vector<double> ref_tiles, ref_se;
+  std::vector<size_t> ref_counts;
+  pt.reference =
+      reference_indirect(path, grid.first, grid.second, &ref_tiles, &ref_counts, &ref_se);
   // Frame c alone, computing what `indirect` needs, on one pixel in 2n x 2n where the run
   // searches one in n x n: a mean needs fewer pixels than an image.
-  const std::pair<GBuffer, Camera> small =
-      subsample(full, full_cam, 2 * effective_search_scale(p, full.width, full.height));
+  const std::pair<GBuffer, Camera> small = subsample(full, full_cam, m);
   const GBuffer& g = small.first;
   const Camera& cam = small.second;
   Params q = p;
@@ -71,6 +127,10 @@ CalibrationPoint solve_frame(const Params& p, const GBuffer& full, const Camera&
   // level and the feedback: the first marches and records its gather, the others sum the
   // record with their own radiance and fill (the same results as marching again).
   GatherRecord record;
+  // The tiles' sums without and with the fill (Params::calibration_tiles).
+  std::vector<double> tiles_with, tiles_without;
+  std::vector<size_t> tile_counts;
+  std::vector<double>* tile_sums = nullptr;
   auto mean_at = [&](double s) {
     q.unseen_scale = s;
     HorizonImage h;
@@ -83,12 +143,17 @@ CalibrationPoint solve_frame(const Params& p, const GBuffer& full, const Camera&
       h = search_frame(v, g, cam, q, std::move(fi));
     }
     ++pt.solves;
+    if (tile_sums && grid.first > 0)
+      indirect_tiles(v, g, h, grid.first, grid.second, *tile_sums, tile_counts);
     return indirect_mean(v, g, h);
   };
   const double T = pt.reference;
   // The fill on first, so that the record holds the fill's share of every pixel.
+  tile_sums = &tiles_with;
   pt.with = mean_at(1.0);
+  tile_sums = &tiles_without;
   pt.without = mean_at(0.0);
+  tile_sums = nullptr;
   double x0 = 0, f0 = pt.without - T, x1 = 1, f1 = pt.with - T;
   pt.reaches = pt.with - pt.without > 1e-6 * std::max(std::abs(pt.without), 1e-12);
   if (!pt.reaches) {
@@ -104,6 +169,49 @@ CalibrationPoint solve_frame(const Params& p, const GBuffer& full, const Camera&
       x = secant();
     }
     pt.scale = x;
+    if (grid.first > 0 && pt.scale > 0) {
+      const int cols = grid.first, rows = grid.second;
+      const std::vector<double>& ref = ref_tiles;
+      FillTiles::View& t = pt.tiles;
+      t.cam = cam;
+      t.x0 = g.display_width > 0 ? g.display_x : 0;
+      t.y0 = g.display_width > 0 ? g.display_y : 0;
+      t.w = g.display_width > 0 ? g.display_width : g.width;
+      t.h = g.display_width > 0 ? g.display_height : g.height;
+      t.cols = cols;
+      t.rows = rows;
+      t.factor.assign(size_t(cols) * size_t(rows), 1.f);
+      const double reach = pt.with - pt.without;  // the fill's share of the frame's mean
+      // Each tile's factor as measured, r, and its variance from the render's noise (the
+      // standard error of the tile's mean, through the linear solve).
+      std::vector<double> r(t.factor.size(), 1.0), var(t.factor.size(), 0.0);
+      std::vector<bool> solved(t.factor.size(), false);
+      double spread = 0, noise = 0;
+      size_t n_solved = 0;
+      for (size_t k = 0; k < t.factor.size(); ++k) {
+        if (tile_counts[k] == 0 || ref_counts[k] == 0) continue;
+        const double n = double(tile_counts[k]), with = tiles_with[k] / n,
+                     without = tiles_without[k] / n;
+        if (!(with - without > kTileReach * reach)) continue;
+        const double d = (with - without) * pt.scale;
+        r[k] = (ref[k] - without) / d;
+        var[k] = ref_se[k] * ref_se[k] / (d * d);
+        solved[k] = true;
+        spread += (r[k] - 1) * (r[k] - 1);
+        noise += var[k];
+        ++n_solved;
+      }
+      // Shrunk towards the frame's factor by how much of their spread the noise explains
+      // (empirical Bayes: the true factors' variance about 1 is what the measured ones have
+      // beyond the noise's), so that a render too noisy to tell the tiles apart leaves them
+      // at 1.
+      const double tau2 = n_solved > 0 ? std::max(0.0, (spread - noise) / double(n_solved)) : 0.0;
+      for (size_t k = 0; k < t.factor.size(); ++k) {
+        if (!solved[k]) continue;
+        const double keep = tau2 + var[k] > 0 ? tau2 / (tau2 + var[k]) : 0.0;
+        t.factor[k] = float(std::clamp(1 + keep * (r[k] - 1), kMinTile, kMaxTile));
+      }
+    }
   }
   pt.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return pt;
@@ -196,7 +304,12 @@ std::pair<GBuffer, Camera> subsample(const GBuffer& g, const Camera& cam, int m)
   return {std::move(s), c};
 }
 
-double reference_indirect_mean(const std::string& path) {
+namespace {
+
+// Visits each pixel of the render's data window inside its display window with its DiffCol x
+// DiffInd (R + G + B; non-finite products count as 0) and its place in the display window.
+template <class F>
+void for_each_reference_pixel(const std::string& path, F&& visit) {
   io::ImageFile im(path);
   const std::vector<int> col = io::layer_channels(im, "DiffCol"),
                          ind = io::layer_channels(im, "DiffInd");
@@ -213,21 +326,64 @@ double reference_indirect_mean(const std::string& path) {
   // not the frame it calibrates), as hbil's own mean is taken.
   const OIIO::ImageSpec& sp = im.spec();
   const size_t stride = size_t(hi - lo);
-  size_t pixels = 0;
-  double sum = 0;
   for (int y = std::max(sp.y, sp.full_y);
        y < std::min(sp.y + sp.height, sp.full_y + sp.full_height); ++y)
     for (int x = std::max(sp.x, sp.full_x);
          x < std::min(sp.x + sp.width, sp.full_x + sp.full_width); ++x) {
       const size_t i = size_t(y - sp.y) * size_t(sp.width) + size_t(x - sp.x);
-      ++pixels;
+      double sum = 0;
       for (size_t k = 0; k < nc; ++k) {
         const float v = px[i * stride + size_t(channel(col, k) - lo)] *
                         px[i * stride + size_t(channel(ind, k) - lo)];
         if (std::isfinite(v)) sum += v;
       }
+      visit(x - sp.full_x, y - sp.full_y, sp.full_width, sp.full_height, sum);
     }
+}
+
+}  // namespace
+
+double reference_indirect(const std::string& path, int cols, int rows, std::vector<double>* tiles,
+                          std::vector<size_t>* counts, std::vector<double>* se) {
+  const size_t n_tiles = cols > 0 && rows > 0 ? size_t(cols) * size_t(rows) : 0;
+  // Per tile: the sum, and the squared differences of pixels and their left neighbours in the
+  // same tile, whose mean is twice the noise's variance per pixel where the light varies
+  // smoothly (a render's noise, not its edges, which add a little).
+  std::vector<double> sums(n_tiles, 0.0), diffs(n_tiles, 0.0);
+  std::vector<size_t> n(n_tiles, 0), pairs(n_tiles, 0);
+  size_t pixels = 0;
+  double sum = 0, left = 0;
+  int left_x = -2, left_y = -1;
+  for_each_reference_pixel(path, [&](int x, int y, int w, int h, double v) {
+    ++pixels;
+    sum += v;
+    if (n_tiles == 0) return;
+    const int tx = std::min(cols - 1, int(int64_t(x) * cols / w)),
+              ty = std::min(rows - 1, int(int64_t(y) * rows / h));
+    const size_t t = size_t(ty) * size_t(cols) + size_t(tx);
+    ++n[t];
+    sums[t] += v;
+    if (left_y == y && left_x == x - 1 &&
+        std::min(cols - 1, int(int64_t(left_x) * cols / w)) == tx) {
+      diffs[t] += (v - left) * (v - left);
+      ++pairs[t];
+    }
+    left = v, left_x = x, left_y = y;
+  });
+  std::vector<double> err(n_tiles, 0.0);
+  for (size_t t = 0; t < n_tiles; ++t) {
+    if (n[t] == 0) continue;
+    sums[t] /= double(n[t]);
+    if (pairs[t] > 0) err[t] = std::sqrt(diffs[t] / (2.0 * double(pairs[t])) / double(n[t]));
+  }
+  if (se) *se = std::move(err);
+  if (tiles) *tiles = std::move(sums);
+  if (counts) *counts = std::move(n);
   return pixels > 0 ? sum / double(pixels) : 0.0;
+}
+
+double reference_indirect_mean(const std::string& path) {
+  return reference_indirect(path, 0, 0, nullptr, nullptr, nullptr);
 }
 
 Calibration::Calibration(const Params& p, const io::FramePattern& input,
@@ -295,6 +451,29 @@ std::vector<CalibrationPoint> Calibration::solve(const Params& p,
   std::vector<CalibrationPoint> points;
   for (int c : frames_) points.push_back(solve(p, input, c));
   return points;
+}
+
+FillTiles Calibration::tiles_at(const std::vector<CalibrationPoint>& points, int frame) {
+  FillTiles out;
+  auto add = [&](const CalibrationPoint& q, double w) {
+    if (q.tiles.cols <= 0 || !(w > 0)) return;
+    out.views.push_back(q.tiles);
+    out.views.back().weight = w;
+  };
+  if (points.empty()) return out;
+  if (frame <= points.front().frame) {
+    add(points.front(), 1);
+  } else if (frame >= points.back().frame) {
+    add(points.back(), 1);
+  } else {
+    auto b = std::upper_bound(points.begin(), points.end(), frame,
+                              [](int f, const CalibrationPoint& q) { return f < q.frame; });
+    auto a = std::prev(b);
+    const double t = double(frame - a->frame) / double(b->frame - a->frame);
+    add(*a, 1 - t);
+    add(*b, t);
+  }
+  return out;
 }
 
 double Calibration::scale_at(const std::vector<CalibrationPoint>& points, int frame) {

@@ -28,6 +28,16 @@
 // Frame f uses s interpolated linearly in the frame number between the calibration frames
 // around it, and the nearest one's outside them. Each s_c depends on frame c alone, so a farm
 // chunk uses the factors the whole run uses.
+//
+// Params::calibration_tiles splits each calibration frame into a grid of tiles (at most one per
+// 256 pixels of the render, and per 64 of the pixels computed) and solves each tile's factor
+// the same way from the same two searches, on the tile's means:
+//
+//   s_t = (ref_t − hbil_t(s = 0)) / (hbil_t(s = 1) − hbil_t(s = 0)),   r_t = s_t / s_c
+//
+// clamped to [kMinTile, kMaxTile]; r_t = 1 where the fill brings the tile less than
+// kTileReach of what it brings the frame (its error is not the fill's). A surface then takes
+// s x r at its position (hbil/fill_tiles.h): the render's light where it is, not only its mean.
 #pragma once
 
 #include <string>
@@ -35,6 +45,7 @@
 #include <vector>
 
 #include "hbil/camera.h"
+#include "hbil/fill_tiles.h"
 #include "hbil/gbuffer.h"
 #include "hbil/params.h"
 #include "io/sequence.h"
@@ -43,6 +54,7 @@ namespace hbil::pipeline {
 
 constexpr double kMaxScale = 64.0;
 constexpr int kMaxSolves = 6;
+constexpr double kMinTile = 0.25, kMaxTile = 4.0, kTileReach = 0.1;
 
 struct CalibrationPoint {
   int frame = 0;
@@ -50,8 +62,11 @@ struct CalibrationPoint {
   double reference = 0;          // its mean DiffCol x DiffInd (R + G + B)
   double without = 0, with = 0;  // hbil's mean indirect (R + G + B) with s = 0 and s = 1
   double scale = 1;              // s_c
-  int solves = 0;                // values of s tried to find it (each one or two searches)
-  bool reaches = true;           // false: the fill reaches no pixel (s_c = 1)
+  // Params::calibration_tiles: the tiles' factors relative to s_c (FillTiles::View, its
+  // weight unset); no tiles (cols 0) where the fill reaches no pixel or tiles are off.
+  FillTiles::View tiles;
+  int solves = 0;       // values of s tried to find it (each one or two searches)
+  bool reaches = true;  // false: the fill reaches no pixel (s_c = 1)
   double seconds = 0;
 };
 
@@ -84,6 +99,8 @@ class Calibration {
 
   // The factor of frame f from solved points (ascending frames), as above.
   static double scale_at(const std::vector<CalibrationPoint>& points, int frame);
+  // The tiles of frame f from the same points: each point's with the weight scale_at gives it.
+  static FillTiles tiles_at(const std::vector<CalibrationPoint>& points, int frame);
 
  private:
   std::string pattern_;
@@ -100,5 +117,12 @@ std::pair<GBuffer, Camera> subsample(const GBuffer& g, const Camera& cam, int m)
 // DiffCol x DiffInd, R + G + B (non-finite values count as 0). Throws
 // Error(Exit::missing_pass) naming the file for a missing pass.
 double reference_indirect_mean(const std::string& path);
+// The same, and per tile of a cols x rows grid over the display window (a pixel belongs to
+// the tile its centre lies in; none where cols or rows is 0) the mean in `tiles`, the number
+// of pixels in `counts` and the standard error of the mean from the render's noise (its
+// variance per pixel estimated from the differences of horizontal neighbours, over the
+// number of pixels) in `se`, row-major, in one reading.
+double reference_indirect(const std::string& path, int cols, int rows, std::vector<double>* tiles,
+                          std::vector<size_t>* counts, std::vector<double>* se);
 
 }  // namespace hbil::pipeline

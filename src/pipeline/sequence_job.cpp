@@ -231,6 +231,7 @@ void SequenceJob::run(const Hooks& hooks, Overlap overlap_mode, const SH9* given
   // Each solve computes frames alone, without a chain: slices "auto" as for a run of one frame.
   Params solve_p = resolve_auto_slices(p_, false);
   if (plan_.frames.size() + plan_.preroll.size() == 1) solve_p.feedback = false;
+  FillTiles tiles;  // the frame's calibrated fill level per surface (Params::calibration_tiles)
   auto calibrated_scale = [&](int frame, const GBuffer& g, const Camera& cam) {
     std::vector<CalibrationPoint> points;
     for (int c : calibration_.around(frame)) {
@@ -243,6 +244,7 @@ void SequenceJob::run(const Hooks& hooks, Overlap overlap_mode, const SH9* given
       }
       points.push_back(it->second);
     }
+    tiles = Calibration::tiles_at(points, frame);
     return Calibration::scale_at(points, frame);
   };
   Params single = p_;  // without a chain, with the frame's factor
@@ -344,14 +346,18 @@ void SequenceJob::run(const Hooks& hooks, Overlap overlap_mode, const SH9* given
       look_ahead(frame, cur.cam);
       if (!calibration_.empty()) {
         const double s = calibrated_scale(frame, cur.g, cur.cam);
-        if (chain) chain->set_unseen_scale(s);
+        if (chain) {
+          chain->set_unseen_scale(s);
+          chain->set_fill_tiles(tiles.empty() ? nullptr : &tiles);
+        }
         single.unseen_scale = s;
       }
       AoFrame result =
           chain ? chain->process(std::move(cur.g), cur.cam, frame,
                                  plan_.cuts.count(frame) > 0 || !gap.empty(), environment, &rep)
-                : (cur.g.unpack(), compute_ao_frame(cur.g, cur.cam, single, environment,
-                                                    pano ? &*pano : nullptr, frame));
+                : (cur.g.unpack(),
+                   compute_ao_frame(cur.g, cur.cam, single, environment, pano ? &*pano : nullptr,
+                                    frame, tiles.empty() ? nullptr : &tiles));
       if (!gap.empty() && rep.cut) rep.cut_reason = gap;
       const double compute_ms = ms(t_compute, Clock::now());
       if (!overlap && preroll) read_next();
