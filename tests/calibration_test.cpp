@@ -43,10 +43,9 @@ Params resolved(const std::string& calibration, int bounces = 1) {
   return pipeline::SequenceJob(pipeline::plan_sequence(kShot, "1", 0, ""), p).params();
 }
 
-// hbil's `indirect` on frame 1 alone at unseen_scale s, on what the calibration computes (the
-// centre pixel of every 2 x 2 block at this size): its mean over the pixels, R + G + B.
-// Computed through compute_ao_frame and its `indirect` output, not the calibration's own sum.
-double indirect_mean(Params p, double s) {
+// hbil's `indirect` on what the calibration computes (frame 1, the centre pixel of every 2 x 2
+// block), at unseen_scale s, through compute_ao_frame.
+AoFrame small_frame(Params p, double s) {
   p.unseen_scale = s;
   p.search_scale = 1;
   p.temporal = false;
@@ -55,7 +54,14 @@ double indirect_mean(Params p, double s) {
   GBuffer g = io::read_fields(in, io::fields_needed(in, p), p);
   const Camera cam = io::find_camera(in, g, p);
   const auto small = pipeline::subsample(g, cam, 2);
-  const AoFrame f = compute_ao_frame(small.first, small.second, p);
+  return compute_ao_frame(small.first, small.second, p);
+}
+
+// hbil's `indirect` on frame 1 alone at unseen_scale s, on what the calibration computes (the
+// centre pixel of every 2 x 2 block at this size): its mean over the pixels, R + G + B.
+// Computed through compute_ao_frame and its `indirect` output, not the calibration's own sum.
+double indirect_mean(Params p, double s) {
+  const AoFrame f = small_frame(std::move(p), s);
   double sum = 0;
   for (const Vec3& e : f.indirect) sum += double(e.x) + e.y + e.z;
   return sum / double(f.indirect.size());
@@ -254,20 +260,6 @@ TEST(Calibration, WithTwoBouncesTheSecantIsIterated) {
   EXPECT_LE(c.solves, pipeline::kMaxSolves);
   EXPECT_GT(c.scale, 1.0);
   EXPECT_NEAR(indirect_mean(q, c.scale) / c.reference, 1.0, 1e-3);
-}
-
-// hbil's `indirect` on what the calibration computes (frame 1, the centre pixel of every 2 x 2
-// block), at unseen_scale s, through compute_ao_frame.
-AoFrame small_frame(Params p, double s) {
-  p.unseen_scale = s;
-  p.search_scale = 1;
-  p.temporal = false;
-  const io::FramePattern shot(kShot);
-  const io::InputFrame in = io::open_frame(shot.path(1), 1, p);
-  GBuffer g = io::read_fields(in, io::fields_needed(in, p), p);
-  const Camera cam = io::find_camera(in, g, p);
-  const auto small = pipeline::subsample(g, cam, 2);
-  return compute_ao_frame(small.first, small.second, p);
 }
 
 // Per tile (Params::calibration_tiles), 4 columns: 4 x 2 tiles of 32 x 36 pixels, which a

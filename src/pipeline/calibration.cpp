@@ -192,10 +192,15 @@ CalibrationPoint solve_frame(const Params& p, const GBuffer& full, const Camera&
         if (tile_counts[k] == 0 || ref_counts[k] == 0) continue;
         const double n = double(tile_counts[k]), with = tiles_with[k] / n,
                      without = tiles_without[k] / n;
-        if (!(with - without > kTileReach * reach)) continue;
+        if (!(with - without > 0) || !(with - without > kTileReach * reach)) continue;
         const double d = (with - without) * pt.scale;
         r[k] = (ref[k] - without) / d;
         var[k] = ref_se[k] * ref_se[k] / (d * d);
+        if (!std::isfinite(r[k]) || !std::isfinite(var[k])) {  // beyond a double: left at 1
+          r[k] = 1, var[k] = 0;
+          continue;
+        }
+        r[k] = std::clamp(r[k], -kMaxScale, kMaxScale);  // the spread stays finite
         solved[k] = true;
         spread += (r[k] - 1) * (r[k] - 1);
         noise += var[k];
