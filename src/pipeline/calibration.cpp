@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <optional>
 #include <set>
+#include <tuple>
 
 #include "hbil/ao_frame.h"
 #include "hbil/error.h"
@@ -20,23 +21,6 @@
 namespace hbil::pipeline {
 
 namespace {
-
-// The mean over g's display window of DiffCol x the search's irradiance (hbil's `indirect`),
-// R + G + B; background adds 0. Summed in row order, the same for any thread count.
-double indirect_mean(const ViewGBuffer& v, const GBuffer& g, const HorizonImage& h) {
-  double sum = 0;
-  size_t n = 0;
-  for (int y = 0; y < g.height; ++y)
-    for (int x = 0; x < g.width; ++x) {
-      if (!g.in_display(x, y)) continue;
-      ++n;
-      const size_t i = size_t(y) * size_t(g.width) + size_t(x);
-      if (v.is_background(i)) continue;
-      const Vec3 a = g.diffcol[i], e = h.irradiance[i];
-      sum += double(a.x) * e.x + double(a.y) * e.y + double(a.z) * e.z;
-    }
-  return n ? sum / double(n) : 0.0;
-}
 
 // Sums of DiffCol x the search's irradiance (R + G + B) per tile of a cols x rows grid over
 // g's display window, and the pixels of each (background adds 0 and counts).
@@ -61,15 +45,13 @@ void indirect_tiles(const ViewGBuffer& v, const GBuffer& g, const HorizonImage& 
     }
 }
 
-// The pixels of the render's data window inside its display window (its header alone).
-double reference_pixels(const std::string& path) {
-  io::ImageFile im(path);
-  const OIIO::ImageSpec& sp = im.spec();
-  const int64_t w = std::min(sp.x + sp.width, sp.full_x + sp.full_width) -
-                    std::max(sp.x, sp.full_x),
-                h = std::min(sp.y + sp.height, sp.full_y + sp.full_height) -
-                    std::max(sp.y, sp.full_y);
-  return double(std::max<int64_t>(w, 0)) * double(std::max<int64_t>(h, 0));
+// The mean over g's display window of DiffCol x the search's irradiance (hbil's `indirect`),
+// R + G + B; background adds 0. Summed in row order, the same for any thread count.
+double indirect_mean(const ViewGBuffer& v, const GBuffer& g, const HorizonImage& h) {
+  std::vector<double> sum;
+  std::vector<size_t> n;
+  indirect_tiles(v, g, h, 1, 1, sum, n);
+  return n[0] ? sum[0] / double(n[0]) : 0.0;
 }
 
 // The grid of Params::calibration_tiles over a frame of w x h pixels computed and a render of
@@ -96,13 +78,12 @@ CalibrationPoint solve_frame(const Params& p, const GBuffer& full, const Camera&
   const int m = 2 * effective_search_scale(p, full.width, full.height);
   const int dw = std::max(1, (full.display_width > 0 ? full.display_width : full.width) / m),
             dh = std::max(1, (full.display_width > 0 ? full.display_height : full.height) / m);
-  const std::pair<int, int> grid =
-      p.calibration_tiles > 0 ? tile_grid(p.calibration_tiles, dw, dh, reference_pixels(path))
-                              : std::pair<int, int>{0, 0};
-  std::vector<double> ref_tiles, ref_se;
-  std::vector<size_t> ref_counts;
-  pt.reference =
-      reference_indirect(path, grid.first, grid.second, &ref_tiles, &ref_counts, &ref_se);
+  const ReferenceIndirect ref = reference_indirect(path, [&](double pixels) {
+    return p.calibration_tiles > 0 ? tile_grid(p.calibration_tiles, dw, dh, pixels)
+                                   : std::pair<int, int>{0, 0};
+  });
+  const std::pair<int, int> grid{ref.cols, ref.rows};
+  pt.reference = ref.mean;
   // Frame c alone, computing what `indirect` needs, on one pixel in 2n x 2n where the run
   // searches one in n x n: a mean needs fewer pixels than an image.
   const std::pair<GBuffer, Camera> small = subsample(full, full_cam, m);
@@ -171,7 +152,6 @@ CalibrationPoint solve_frame(const Params& p, const GBuffer& full, const Camera&
     pt.scale = x;
     if (grid.first > 0 && pt.scale > 0) {
       const int cols = grid.first, rows = grid.second;
-      const std::vector<double>& ref = ref_tiles;
       FillTiles::View& t = pt.tiles;
       t.cam = cam;
       t.x0 = g.display_width > 0 ? g.display_x : 0;
@@ -189,13 +169,13 @@ CalibrationPoint solve_frame(const Params& p, const GBuffer& full, const Camera&
       double spread = 0, noise = 0;
       size_t n_solved = 0;
       for (size_t k = 0; k < t.factor.size(); ++k) {
-        if (tile_counts[k] == 0 || ref_counts[k] == 0) continue;
+        if (tile_counts[k] == 0 || ref.counts[k] == 0) continue;
         const double n = double(tile_counts[k]), with = tiles_with[k] / n,
                      without = tiles_without[k] / n;
         if (!(with - without > 0) || !(with - without > kTileReach * reach)) continue;
         const double d = (with - without) * pt.scale;
-        r[k] = (ref[k] - without) / d;
-        var[k] = ref_se[k] * ref_se[k] / (d * d);
+        r[k] = (ref.tiles[k] - without) / d;
+        var[k] = ref.se[k] * ref.se[k] / (d * d);
         if (!std::isfinite(r[k]) || !std::isfinite(var[k])) {  // beyond a double: left at 1
           r[k] = 1, var[k] = 0;
           continue;
@@ -313,8 +293,8 @@ namespace {
 
 // Visits each pixel of the render's data window inside its display window with its DiffCol x
 // DiffInd (R + G + B; non-finite products count as 0) and its place in the display window.
-template <class F>
-void for_each_reference_pixel(const std::string& path, F&& visit) {
+template <class Open, class F>
+void for_each_reference_pixel(const std::string& path, Open&& open, F&& visit) {
   io::ImageFile im(path);
   const std::vector<int> col = io::layer_channels(im, "DiffCol"),
                          ind = io::layer_channels(im, "DiffInd");
@@ -331,6 +311,11 @@ void for_each_reference_pixel(const std::string& path, F&& visit) {
   // not the frame it calibrates), as hbil's own mean is taken.
   const OIIO::ImageSpec& sp = im.spec();
   const size_t stride = size_t(hi - lo);
+  const int64_t w = std::min(sp.x + sp.width, sp.full_x + sp.full_width) -
+                    std::max(sp.x, sp.full_x),
+                h = std::min(sp.y + sp.height, sp.full_y + sp.full_height) -
+                    std::max(sp.y, sp.full_y);
+  open(double(std::max<int64_t>(w, 0)) * double(std::max<int64_t>(h, 0)));
   for (int y = std::max(sp.y, sp.full_y);
        y < std::min(sp.y + sp.height, sp.full_y + sp.full_height); ++y)
     for (int x = std::max(sp.x, sp.full_x);
@@ -348,26 +333,36 @@ void for_each_reference_pixel(const std::string& path, F&& visit) {
 
 }  // namespace
 
-double reference_indirect(const std::string& path, int cols, int rows, std::vector<double>* tiles,
-                          std::vector<size_t>* counts, std::vector<double>* se) {
-  const size_t n_tiles = cols > 0 && rows > 0 ? size_t(cols) * size_t(rows) : 0;
+ReferenceIndirect reference_indirect(const std::string& path,
+                                     const std::function<std::pair<int, int>(double)>& grid) {
+  ReferenceIndirect r;
   // Per tile: the sum, and the squared differences of pixels and their left neighbours in the
   // same tile, whose mean is twice the noise's variance per pixel where the light varies
   // smoothly (a render's noise, not its edges, which add a little).
-  std::vector<double> sums(n_tiles, 0.0), diffs(n_tiles, 0.0);
-  std::vector<size_t> n(n_tiles, 0), pairs(n_tiles, 0);
-  size_t pixels = 0;
+  std::vector<double> diffs;
+  std::vector<size_t> pairs;
+  size_t n_tiles = 0, pixels = 0;
   double sum = 0, left = 0;
   int left_x = -2, left_y = -1;
-  for_each_reference_pixel(path, [&](int x, int y, int w, int h, double v) {
+  auto open = [&](double render_pixels) {
+    std::tie(r.cols, r.rows) = grid(render_pixels);
+    n_tiles = r.cols > 0 && r.rows > 0 ? size_t(r.cols) * size_t(r.rows) : 0;
+    r.tiles.assign(n_tiles, 0.0);
+    r.se.assign(n_tiles, 0.0);
+    r.counts.assign(n_tiles, 0);
+    diffs.assign(n_tiles, 0.0);
+    pairs.assign(n_tiles, 0);
+  };
+  for_each_reference_pixel(path, open, [&](int x, int y, int w, int h, double v) {
     ++pixels;
     sum += v;
     if (n_tiles == 0) return;
+    const int cols = r.cols, rows = r.rows;
     const int tx = std::min(cols - 1, int(int64_t(x) * cols / w)),
               ty = std::min(rows - 1, int(int64_t(y) * rows / h));
     const size_t t = size_t(ty) * size_t(cols) + size_t(tx);
-    ++n[t];
-    sums[t] += v;
+    ++r.counts[t];
+    r.tiles[t] += v;
     if (left_y == y && left_x == x - 1 &&
         std::min(cols - 1, int(int64_t(left_x) * cols / w)) == tx) {
       diffs[t] += (v - left) * (v - left);
@@ -375,20 +370,18 @@ double reference_indirect(const std::string& path, int cols, int rows, std::vect
     }
     left = v, left_x = x, left_y = y;
   });
-  std::vector<double> err(n_tiles, 0.0);
   for (size_t t = 0; t < n_tiles; ++t) {
-    if (n[t] == 0) continue;
-    sums[t] /= double(n[t]);
-    if (pairs[t] > 0) err[t] = std::sqrt(diffs[t] / (2.0 * double(pairs[t])) / double(n[t]));
+    if (r.counts[t] == 0) continue;
+    r.tiles[t] /= double(r.counts[t]);
+    if (pairs[t] > 0)
+      r.se[t] = std::sqrt(diffs[t] / (2.0 * double(pairs[t])) / double(r.counts[t]));
   }
-  if (se) *se = std::move(err);
-  if (tiles) *tiles = std::move(sums);
-  if (counts) *counts = std::move(n);
-  return pixels > 0 ? sum / double(pixels) : 0.0;
+  r.mean = pixels > 0 ? sum / double(pixels) : 0.0;
+  return r;
 }
 
 double reference_indirect_mean(const std::string& path) {
-  return reference_indirect(path, 0, 0, nullptr, nullptr, nullptr);
+  return reference_indirect(path, [](double) { return std::pair<int, int>{0, 0}; }).mean;
 }
 
 Calibration::Calibration(const Params& p, const io::FramePattern& input,

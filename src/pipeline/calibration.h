@@ -40,6 +40,7 @@
 // s x r at its position (hbil/fill_tiles.h): the render's light where it is, not only its mean.
 #pragma once
 
+#include <functional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -117,12 +118,18 @@ std::pair<GBuffer, Camera> subsample(const GBuffer& g, const Camera& cam, int m)
 // DiffCol x DiffInd, R + G + B (non-finite values count as 0). Throws
 // Error(Exit::missing_pass) naming the file for a missing pass.
 double reference_indirect_mean(const std::string& path);
-// The same, and per tile of a cols x rows grid over the display window (a pixel belongs to
-// the tile its centre lies in; none where cols or rows is 0) the mean in `tiles`, the number
-// of pixels in `counts` and the standard error of the mean from the render's noise (its
-// variance per pixel estimated from the differences of horizontal neighbours, over the
-// number of pixels) in `se`, row-major, in one reading.
-double reference_indirect(const std::string& path, int cols, int rows, std::vector<double>* tiles,
-                          std::vector<size_t>* counts, std::vector<double>* se);
+// The same, and per tile of a grid over the display window (a pixel belongs to the tile its
+// centre lies in), row-major: the mean, the number of pixels and the standard error of the mean
+// from the render's noise (its variance per pixel estimated from the differences of horizontal
+// neighbours, over the number of pixels), in one reading. `grid` chooses cols x rows from the
+// number of pixels the render has in its display window ({0, 0}: no tiles).
+struct ReferenceIndirect {
+  double mean = 0;
+  int cols = 0, rows = 0;
+  std::vector<double> tiles, se;
+  std::vector<size_t> counts;
+};
+ReferenceIndirect reference_indirect(const std::string& path,
+                                     const std::function<std::pair<int, int>(double)>& grid);
 
 }  // namespace hbil::pipeline
