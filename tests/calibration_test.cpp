@@ -571,5 +571,59 @@ TEST(Calibration, ARunTakesTheRendersMean) {
   }
 }
 
+// calibration "auto" (the default): the input's own file names in calibration/ beside its
+// frames, where any exists; a run that finds them is the run given them explicitly, and one
+// that finds none is the run without calibration.
+TEST(Calibration, AutoFindsTheRendersBesideTheFrames) {
+  namespace fs = std::filesystem;
+  test::TempDir dir(test::test_name());
+  fs::create_directories(dir / "shot");
+  for (const char* f :
+       {"frame_0001.exr", "frame_0002.exr", "frame_0001.camera.json", "frame_0002.camera.json"})
+    fs::create_symlink(test::kRoomPoles + "/" + f, dir / ("shot/" + std::string(f)));
+  const io::FramePattern shot(dir / "shot/frame_####.exr");
+  EXPECT_EQ(pipeline::resolve_calibration("auto", shot), "");
+  EXPECT_EQ(pipeline::resolve_calibration("", shot), "");
+  EXPECT_EQ(pipeline::resolve_calibration("cal/f_####.exr", shot), "cal/f_####.exr");
+
+  const std::string set = " --no-display --set 'outputs=[\"indirect\"]' --set temporal=false";
+  auto run = [&](const std::string& out, const std::string& extra) {
+    const test::RunResult r = test::run_hbil(
+        "run " + test::q(shot.text()) + " -o " + test::q(dir / (out + "/f_####.exr")) + set + extra,
+        dir.path());
+    EXPECT_EQ(r.code, 0) << r.err;
+    return r;
+  };
+  // None there: the default run is the run without calibration.
+  const test::RunResult none = run("none", "");
+  EXPECT_FALSE(test::contains(none.err, "calibration")) << none.err;
+  run("off", " --set calibration=");
+
+  fs::create_directories(dir / "shot/calibration");
+  write_calibration(dir / "shot/calibration/frame_0001.exr", 0.2f);
+  const std::string beside = dir / "shot/calibration/frame_####.exr";
+  EXPECT_EQ(pipeline::resolve_calibration("auto", shot), beside);
+  EXPECT_EQ(pipeline::resolve_calibration("auto", io::FramePattern(dir / "shot/frame_0001.exr")),
+            dir / "shot/calibration/frame_0001.exr");
+  EXPECT_EQ(pipeline::resolve_calibration("auto", io::FramePattern(dir / "shot/frame_0002.exr")),
+            "");
+  const test::RunResult found = run("auto", "");
+  EXPECT_TRUE(test::contains(found.err, "calibration auto: " + beside)) << found.err;
+  EXPECT_TRUE(test::contains(found.err, "calibration, frame 1: unseen_scale")) << found.err;
+  run("given", " --set calibration=" + test::q(beside));
+  run("stillnone", " --set calibration=");
+  for (const char* f : {"/f_0001.exr", "/f_0002.exr"}) {
+    const test::Pixels a = test::read_pixels(dir / ("auto" + std::string(f))),
+                       b = test::read_pixels(dir / ("given" + std::string(f))),
+                       c = test::read_pixels(dir / ("none" + std::string(f))),
+                       d = test::read_pixels(dir / ("off" + std::string(f))),
+                       e = test::read_pixels(dir / ("stillnone" + std::string(f)));
+    EXPECT_TRUE(a.data == b.data) << f;
+    EXPECT_TRUE(c.data == d.data) << f;
+    EXPECT_TRUE(c.data == e.data) << f;
+    EXPECT_FALSE(a.data == c.data) << f << ": the render's level differs from the default's";
+  }
+}
+
 }  // namespace
 }  // namespace hbil

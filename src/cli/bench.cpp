@@ -51,8 +51,8 @@ void bench(const BenchOptions& o) {
   // The table: a row per configuration; per layer its PSNR, * on the Pareto front.
   // With a calibration, its renders' time per frame is part of the cost (the Pareto fronts and
   // the speedup count it): a column of its own.
-  const bool calibrated = std::any_of(r.configs.begin(), r.configs.end(),
-                                      [](const auto& c) { return !c.params.calibration.empty(); });
+  const bool calibrated =
+      std::any_of(r.configs.begin(), r.configs.end(), [](const auto& c) { return c.calibrated; });
   std::printf("%-32s %9s", "configuration", "s/frame");
   if (calibrated) std::printf(" %9s", "+cal s");
   for (const std::string& l : r.layers) std::printf(" %12s", (l + " dB").c_str());
@@ -61,7 +61,7 @@ void bench(const BenchOptions& o) {
   for (const pipeline::ConfigResult& c : r.configs) {
     std::printf("%-32s %9.3f", c.name.c_str(), c.seconds_per_frame);
     if (calibrated) {
-      if (c.params.calibration.empty())
+      if (!c.calibrated)
         std::printf(" %9s", "-");
       else if (c.calibration_seconds >= 0)
         std::printf(" %9.4f", c.calibration_seconds);

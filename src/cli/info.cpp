@@ -12,6 +12,7 @@
 #include "io/camera_io.h"
 #include "io/exr_frame.h"
 #include "io/sequence.h"
+#include "pipeline/calibration.h"
 
 namespace hbil::cli {
 
@@ -157,6 +158,13 @@ void info(const std::string& path, const ParamOptions& po) {
     } catch (const Error& e) {
       std::cout << "not available: " << e.what() << "\n";
     }
+  }
+  if (p.calibration == "auto") {
+    const std::string found = pipeline::resolve_calibration("auto", io::FramePattern(path));
+    std::cout << "calibration: auto = "
+              << (found.empty() ? "none (no render of this frame in calibration/ beside it)"
+                                : found)
+              << "\n";
   }
   std::cout << "outputs:\n";
   for (const auto& o : known_outputs()) {

@@ -108,7 +108,9 @@ void run_frames(const RunOptions& o, io::RunLog& log, int& written) {
                         ? "the elevations it does not show as open as its top and bottom edges say"
                         : "the elevations it does not show escaping")
                 << " (hbil info FRAME prints both)\n";
-    if (!p.calibration.empty() && !gathers(p))
+    if (requested.calibration == "auto" && !p.calibration.empty() && gathers(p))
+      std::cerr << "hbil: calibration auto: " << p.calibration << "\n";
+    if (requested.calibration != "auto" && !p.calibration.empty() && !gathers(p))
       std::cerr << "hbil: calibration left unused: the outputs gather no light (irradiance, "
                    "indirect or composite)\n";
     if (p.method == "bitmask") {

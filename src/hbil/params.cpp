@@ -319,7 +319,9 @@ Params params_from_json(const json& j, const std::string& where, Params p) {
       p.panorama = v.get<std::string>();
     } else if (key == "calibration") {
       if (!v.is_string())
-        fail(where, "key 'calibration' must be a frame pattern of EXR files, got " + v.dump());
+        fail(where,
+             "key 'calibration' must be a frame pattern of EXR files, \"auto\" or \"\", got " +
+                 v.dump());
       p.calibration = v.get<std::string>();
     } else if (key == "view_layer") {
       if (!v.is_string()) fail(where, "key 'view_layer' must be a string, got " + v.dump());

@@ -71,8 +71,10 @@ struct Params {
   double unseen_scale = 1.0;
   // A frame pattern (or one file) of renders with global illumination, at any sample count and
   // resolution, of some of the shot's frames (DiffCol and DiffInd): at each, unseen_scale is
-  // the factor that gives hbil's single-frame indirect light the render's mean; "" (off).
-  std::string calibration;
+  // the factor that gives hbil's single-frame indirect light the render's mean; "auto": the
+  // input's file names in a folder calibration/ beside its frames, where any exists
+  // (pipeline/calibration.h, resolve_calibration); "" (off).
+  std::string calibration = "auto";
   // With `calibration`: the columns of a grid of tiles over each calibration frame, in each of
   // which the fill's level is solved as well (rows in proportion, at most one tile per 256 of the
   // render's pixels), relative to the frame's factor; the factor of a surface is its tile's,

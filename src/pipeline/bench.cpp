@@ -313,6 +313,7 @@ BenchResult run_bench(const BenchSettings& s,
     cr.name = c.name;
     cr.params = c.params;
     const SequenceJob job(plan, resolved[ci]);
+    cr.calibrated = !job.calibration().empty();
     cr.calibration_seconds = calibration_render_seconds(job.calibration(), plan.frames.size());
     std::vector<TemporalChange> ours(s.refs.size()), theirs(s.refs.size());
     SequenceJob::Hooks hooks;
@@ -496,7 +497,7 @@ void write_bench(const BenchResult& r, const std::string& dir) {
     jc["name"] = c.name;
     jc["parameters"] = to_json(c.params);
     jc["seconds_per_frame"] = c.seconds_per_frame;
-    if (!c.params.calibration.empty())
+    if (c.calibrated)
       jc["calibration_render_seconds_per_frame"] = c.calibration_seconds >= 0
                                                        ? nlohmann::json(c.calibration_seconds)
                                                        : nlohmann::json(nullptr);

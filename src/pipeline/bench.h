@@ -90,6 +90,8 @@ struct ConfigResult {
   // time, as for --render) over the frames, part of what the configuration costs; -1 where
   // a calibration render has none (then not counted).
   double calibration_seconds = 0;
+  // A calibration was found and used (Params::calibration "auto" may find none).
+  bool calibrated = false;
   // What a frame costs: seconds_per_frame and the calibration renders' share. The Pareto
   // fronts, the chart and the equal-error speedup take this.
   double cost_per_frame() const { return seconds_per_frame + std::max(0.0, calibration_seconds); }

@@ -384,6 +384,16 @@ double reference_indirect_mean(const std::string& path) {
   return reference_indirect(path, [](double) { return std::pair<int, int>{0, 0}; }).mean;
 }
 
+std::string resolve_calibration(const std::string& calibration, const io::FramePattern& input) {
+  if (calibration != "auto") return calibration;
+  const std::filesystem::path in(input.text());
+  const std::string beside = (in.parent_path() / "calibration" / in.filename()).string();
+  const io::FramePattern cp(beside);
+  const bool found =
+      cp.is_sequence() ? !cp.existing_frames().empty() : std::filesystem::is_regular_file(beside);
+  return found ? beside : std::string();
+}
+
 Calibration::Calibration(const Params& p, const io::FramePattern& input,
                          const std::vector<int>& frames)
     : pattern_(p.calibration) {

@@ -71,6 +71,12 @@ struct CalibrationPoint {
   double seconds = 0;
 };
 
+// Params::calibration "auto": the input's own file names in a folder "calibration" beside
+// its frames ("shot/frame_####.exr" -> "shot/calibration/frame_####.exr"; a single file
+// likewise) where at least one of them exists, else "" (no calibration). Anything else is
+// returned as given.
+std::string resolve_calibration(const std::string& calibration, const io::FramePattern& input);
+
 class Calibration {
  public:
   Calibration() = default;

@@ -161,6 +161,8 @@ SequenceJob::SequenceJob(SequencePlan plan, const Params& requested) : plan_(std
   }
   // Far field: the environment projected to SH once for the whole run.
   if (!p_.environment.empty()) environment_ = io::load_environment(p_.environment);
+  // calibration "auto": the renders in calibration/ beside the input, where there are any.
+  p_.calibration = resolve_calibration(p_.calibration, plan_.input);
   // Only the gather has a fill to calibrate.
   if (!p_.calibration.empty() && gathers(p_)) {
     std::vector<int> all = plan_.preroll;
