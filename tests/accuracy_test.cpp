@@ -202,6 +202,7 @@ TEST(AccuracyAgainstCycles, UnseenRadianceAutoOnBothSamples) {
   Params off, interior;
   off.unseen_radiance_auto = false;
   interior.unseen_carry = true;
+  interior.unseen_carry_auto = false;
   for (const auto& [scene, bound, carried] :
        {std::tuple{"room_poles", 30.05, 31.55}, {"courtyard", 30.55, 31.6}}) {
     const std::string in = std::string(HBIL_SOURCE_DIR) + "/samples/" + scene + "/frame_####.exr";

@@ -623,6 +623,20 @@ TEST(Calibration, AutoFindsTheRendersBesideTheFrames) {
     EXPECT_TRUE(c.data == e.data) << f;
     EXPECT_FALSE(a.data == c.data) << f << ": the render's level differs from the default's";
   }
+  // unseen_carry "auto": on with the calibration found, off without; each file's preset says so.
+  auto preset = [&](const std::string& out) {
+    const test::Pixels px = test::read_pixels(dir / (out + "/f_0001.exr"));
+    return nlohmann::json::parse(px.spec.get_string_attribute("hbil:preset"));
+  };
+  EXPECT_EQ(preset("auto")["unseen_carry"], true);
+  EXPECT_EQ(preset("auto")["calibration"], beside);
+  EXPECT_EQ(preset("none")["unseen_carry"], false);
+  EXPECT_EQ(preset("none")["calibration"], "");
+  // Given false, it stays off with the calibration: not the run with it on.
+  run("nocarry", " --set unseen_carry=false");
+  EXPECT_EQ(preset("nocarry")["unseen_carry"], false);
+  EXPECT_FALSE(test::read_pixels(dir / "nocarry/f_0001.exr").data ==
+               test::read_pixels(dir / "auto/f_0001.exr").data);
 }
 
 }  // namespace

@@ -211,6 +211,7 @@ TEST_F(Cli, RunWritesLayersAndMetadata) {
           resolve_scene_params(as_run, measure_scene(g, io::find_camera(f1, g, as_run), as_run));
     }
     as_run.calibration = "";  // "auto": the sample has no calibration/ folder beside its frames
+    as_run.unseen_carry_auto = false;  // "auto": false, without a calibration
     EXPECT_EQ(preset, to_json(as_run));
     EXPECT_NEAR(preset["gather_radius"].get<double>(), 5.37, 0.01);  // 256 px x 2.99 m / 142.2 px
     EXPECT_EQ(preset["thickness"], 0.4);  // 0.15 x 2.99 m, at most 0.4 x radius

@@ -182,6 +182,16 @@ TEST(Params, WrongTypeNamesKeyAndValue) {
       Exit::preset, {"'interleave'", "true or false"});
   expect_error(
       [] {
+        params_from_json(json{{"unseen_carry", 1}}, "t.json");
+      },
+      Exit::preset, {"'unseen_carry'", "true, false or \"auto\"", "1"});
+  expect_error(
+      [] {
+        params_from_json(json{{"unseen_carry", "yes"}}, "t.json");
+      },
+      Exit::preset, {"'unseen_carry'", "\"yes\""});
+  expect_error(
+      [] {
         params_from_json(json{{"view_layer", 3}}, "t.json");
       },
       Exit::preset, {"'view_layer'", "string"});

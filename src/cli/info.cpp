@@ -25,7 +25,10 @@ std::string join(const std::vector<std::string>& v) {
 }
 
 void info(const std::string& path, const ParamOptions& po) {
-  const Params p = po.load();
+  Params p = po.load();
+  // unseen_carry "auto", as a run of this frame resolves it.
+  if (p.unseen_carry_auto)
+    p.unseen_carry = !pipeline::resolve_calibration(p.calibration, io::FramePattern(path)).empty();
   const io::InputFrame f = io::open_frame(path, io::frame_number_from_name(path).value_or(0), p);
   std::cout << "file: " << path << "\n"
             << "resolution: " << f.spec.width << "x" << f.spec.height << ", " << f.spec.nchannels

@@ -99,8 +99,9 @@ const std::vector<ParamInfo>& params_table() {
        "unseen_radiance \"auto\": the elevations above and below what the frame shows are "
        "taken to be as open as the frame's top and bottom edges say: background, and a floor "
        "at the top edge or a ceiling at the bottom, leave them open, walls close them (true: "
-       "for enclosed shots, presets/interior.json); false (default): they escape, so that a "
-       "frame says nothing of what it does not reach"},
+       "for enclosed shots, presets/interior.json); false: they escape, so that a frame says "
+       "nothing of what it does not reach; \"auto\" (default): true where a calibration is "
+       "used, false otherwise"},
       {"unseen_scale", &Params::unseen_scale, 0, 1e3, "factor",
        "unseen_radiance (auto or a number) is multiplied by this; with calibration, the factor "
        "is solved at each calibration frame instead (and interpolated between them)"},
@@ -220,6 +221,7 @@ json to_json(const Params& p) {
   if (p.thickness_auto) j["thickness"] = "auto";
   if (p.gather_thickness_auto) j["gather_thickness"] = "auto";
   if (p.unseen_radiance_auto) j["unseen_radiance"] = "auto";
+  if (p.unseen_carry_auto) j["unseen_carry"] = "auto";
   j["method"] = p.method;
   j["reprojection"] = p.reprojection;
   j["emission"] = p.emission;
@@ -280,20 +282,25 @@ Params params_from_json(const json& j, const std::string& where, Params p) {
     // gather_radius and thickness: a number, or "auto" (derived from the shot).
     const bool may_be_auto = key == "gather_radius" || key == "thickness" ||
                              key == "gather_thickness" || key == "unseen_radiance" ||
-                             key == "slices";
+                             key == "slices" || key == "unseen_carry";
     bool& auto_flag = key == "gather_radius"     ? p.gather_radius_auto
                       : key == "thickness"       ? p.thickness_auto
                       : key == "unseen_radiance" ? p.unseen_radiance_auto
                       : key == "slices"          ? p.slices_auto
+                      : key == "unseen_carry"    ? p.unseen_carry_auto
                                                  : p.gather_thickness_auto;
+    const bool boolean = key == "unseen_carry";
     const std::string number_or_auto = "key '" + key + "' must be " +
-                                       (key == "slices" ? "an integer" : "a number") +
+                                       (key == "slices" ? "an integer"
+                                        : boolean       ? "true, false"
+                                                        : "a number") +
                                        " or \"auto\", got ";
     if (may_be_auto && v.is_string()) {
       if (v.get<std::string>() != "auto") fail(where, number_or_auto + v.dump());
       auto_flag = true;
     } else if (row != params_table().end()) {
-      if (may_be_auto && !v.is_number()) fail(where, number_or_auto + v.dump());
+      if (may_be_auto && !(boolean ? v.is_boolean() : v.is_number()))
+        fail(where, number_or_auto + v.dump());
       read_number(p, *row, v, where);
       if (may_be_auto) auto_flag = false;
     } else if (key == "method") {

@@ -63,9 +63,12 @@ struct Params {
   // (unseen.h).
   double unseen_radiance = 0.0;
   bool unseen_radiance_auto = true;
-  // "auto": the elevations the frame does not reach escape (false), or are as open as the
-  // nearest one it does (true: enclosed shots, presets/interior.json).
+  // unseen_radiance "auto": the elevations the frame does not reach escape (false), or are as
+  // open as the nearest one it does (true: enclosed shots, presets/interior.json). "auto"
+  // (unseen_carry_auto): true where a calibration is used (its render sets the fill's level,
+  // the frame's edges its shape), false otherwise; resolved by the sequence job.
   bool unseen_carry = false;
+  bool unseen_carry_auto = true;
   // unseen_radiance (auto or a number) is multiplied by this: the fill's level. With
   // `calibration`, the factor is solved per calibration frame instead (pipeline/calibration.h).
   double unseen_scale = 1.0;

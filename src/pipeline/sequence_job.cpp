@@ -169,6 +169,11 @@ SequenceJob::SequenceJob(SequencePlan plan, const Params& requested) : plan_(std
     all.insert(all.end(), plan_.frames.begin(), plan_.frames.end());
     calibration_ = Calibration(p_, plan_.input, all);
   }
+  // unseen_carry "auto": with a calibration, whose render sets the fill's level.
+  if (p_.unseen_carry_auto) {
+    p_.unseen_carry = !calibration_.empty();
+    p_.unseen_carry_auto = false;
+  }
 }
 
 bool SequenceJob::overlaps(Overlap o) const {
