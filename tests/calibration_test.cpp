@@ -607,6 +607,15 @@ TEST(Calibration, AutoFindsTheRendersBesideTheFrames) {
             dir / "shot/calibration/frame_0001.exr");
   EXPECT_EQ(pipeline::resolve_calibration("auto", io::FramePattern(dir / "shot/frame_0002.exr")),
             "");
+  // hbil info says what a run of each frame finds.
+  const test::RunResult info1 =
+      test::run_hbil("info " + test::q(dir / "shot/frame_0001.exr"), dir.path());
+  EXPECT_TRUE(test::contains(
+      info1.out, "calibration: auto = " + std::string(dir / "shot/calibration/frame_0001.exr")))
+      << info1.out;
+  const test::RunResult info2 =
+      test::run_hbil("info " + test::q(dir / "shot/frame_0002.exr"), dir.path());
+  EXPECT_TRUE(test::contains(info2.out, "calibration: auto = none")) << info2.out;
   const test::RunResult found = run("auto", "");
   EXPECT_TRUE(test::contains(found.err, "calibration auto: " + beside)) << found.err;
   EXPECT_TRUE(test::contains(found.err, "calibration, frame 1: unseen_scale")) << found.err;
