@@ -1232,6 +1232,17 @@ TEST_F(Cli, PresetDumpAppliesSet) {
   EXPECT_EQ(hbil("preset --dump --set radius=0").code, int(Exit::preset));
 }
 
+// preset --describe lists every key with its default, as the dump has it.
+TEST_F(Cli, PresetDescribeListsEveryKey) {
+  const RunResult r = hbil("preset --describe");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const json d = to_json(Params{});
+  for (auto it = d.begin(); it != d.end(); ++it)
+    EXPECT_TRUE(contains(r.out, "\n" + it.key() + " = " + it.value().dump()) ||
+                r.out.rfind(it.key() + " = " + it.value().dump(), 0) == 0)
+        << it.key();
+}
+
 // The man page documents every option of every command: each "--name" that a command's
 // --help lists appears in man/hbil.1 (as \-\-name).
 TEST_F(Cli, ManPageDocumentsEveryOption) {

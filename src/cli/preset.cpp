@@ -36,6 +36,19 @@ void add_preset(CLI::App& app) {
           << "\n    occlusion model: \"horizon\" (HBIL) or \"bitmask\" (visibility bitmask)\n";
       std::cout << "environment = " << d["environment"].dump()
                 << "\n    far field: \"\" (off), an equirectangular EXR, or \"rgb:r,g,b\"\n";
+      std::cout << "panorama = " << d["panorama"].dump()
+                << "\n    a frame pattern of panoramic G-buffers of each frame (light from what "
+                   "the frame does not show); \"\" (off)\n";
+      std::cout << "calibration = " << d["calibration"].dump()
+                << "\n    a frame pattern of 1-spp renders with global illumination of some "
+                   "frames (DiffCol, DiffInd), which set the fill's level; \"auto\": the input's "
+                   "file names in calibration/ beside its frames, where any is there; \"\" "
+                   "(off)\n";
+      std::cout << "reprojection = " << d["reprojection"].dump()
+                << "\n    how the previous frame is found: \"auto\", \"scatter\" or "
+                   "\"vector\"\n";
+      std::cout << "emission = " << d["emission"].dump()
+                << "\n    emitting surfaces: \"auto\", \"direct\" or \"gathered\"\n";
       std::cout << "view_layer = " << d["view_layer"].dump()
                 << "\n    view layer of the channels; \"\" detects it\n";
       std::cout << "input_space = " << d["input_space"].dump()
@@ -48,6 +61,8 @@ void add_preset(CLI::App& app) {
       for (size_t k = 0; k < known_outputs().size(); ++k)
         std::cout << (k ? ", " : "") << known_outputs()[k];
       std::cout << ")\n";
+      std::cout << "compression = " << d["compression"].dump()
+                << "\n    EXR compression of the outputs\n";
     }
   });
 }
