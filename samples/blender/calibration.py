@@ -1,7 +1,7 @@
 """Render the calibration frames of the open Blender scene, where hbil finds them.
 
     blender -b shot.blend --python samples/blender/calibration.py -- \
-        --output //render/frame_####.exr [--every 8] [--width 256] [--samples 1] [--frames A-B]
+        --output //render/frame_####.exr [--every 4] [--width 256] [--samples 1] [--frames A-B]
 
 A calibration frame is the scene rendered again with global illumination, small and at one
 sample per pixel, with the Diffuse Color and Diffuse Indirect passes: its mean tells hbil the
@@ -12,7 +12,7 @@ own name (``//render/calibration/frame_0001.exr``), where hbil's default (`calib
 "auto") finds it.
 
 Frames: the first of the range (``--frames``, default the scene's), every N-th after it
-(``--every``, default 8; 0: the first alone) and the last. Size: ``--width`` pixels (default
+(``--every``, default 4; 0: the first alone) and the last. Size: ``--width`` pixels (default
 256; never more than the scene's), the height in the scene's aspect. Cycles, ``--samples``
 (default 1) without adaptive sampling or denoising, the scene's own bounces and seed (its
 global illumination is what hbil stands in for). The scene's settings are put back
@@ -53,7 +53,7 @@ def main():
     p.add_argument("--output", required=True,
                    help="the shot's frame pattern, e.g. //render/frame_####.exr")
     p.add_argument("--frames", default=None, help="A-B (default: the scene's range)")
-    p.add_argument("--every", type=int, default=8)
+    p.add_argument("--every", type=int, default=4)
     p.add_argument("--width", type=int, default=256)
     p.add_argument("--samples", type=int, default=1)
     a = p.parse_args(argv)
