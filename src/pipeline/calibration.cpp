@@ -389,9 +389,9 @@ std::string resolve_calibration(const std::string& calibration, const io::FrameP
   const std::filesystem::path in(input.text());
   const std::string beside = (in.parent_path() / "calibration" / in.filename()).string();
   const io::FramePattern cp(beside);
-  const bool found =
-      cp.is_sequence() ? !cp.existing_frames().empty() : std::filesystem::is_regular_file(beside);
-  return found ? beside : std::string();
+  // existing_frames() finds a sequence's files, and a single file where it is one; an
+  // unreadable folder finds none.
+  return cp.existing_frames().empty() ? std::string() : beside;
 }
 
 Calibration::Calibration(const Params& p, const io::FramePattern& input,
