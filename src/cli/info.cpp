@@ -26,9 +26,10 @@ std::string join(const std::vector<std::string>& v) {
 
 void info(const std::string& path, const ParamOptions& po) {
   Params p = po.load();
-  // unseen_carry "auto", as a run of this frame resolves it.
-  if (p.unseen_carry_auto)
-    p.unseen_carry = !pipeline::resolve_calibration(p.calibration, io::FramePattern(path)).empty();
+  // The calibration a run of this frame uses, and unseen_carry "auto" as it resolves it.
+  const std::string calibration =
+      pipeline::resolve_calibration(p.calibration, io::FramePattern(path));
+  if (p.unseen_carry_auto) p.unseen_carry = !calibration.empty();
   const io::InputFrame f = io::open_frame(path, io::frame_number_from_name(path).value_or(0), p);
   std::cout << "file: " << path << "\n"
             << "resolution: " << f.spec.width << "x" << f.spec.height << ", " << f.spec.nchannels
@@ -162,13 +163,11 @@ void info(const std::string& path, const ParamOptions& po) {
       std::cout << "not available: " << e.what() << "\n";
     }
   }
-  if (p.calibration == "auto") {
-    const std::string found = pipeline::resolve_calibration("auto", io::FramePattern(path));
+  if (p.calibration == "auto")
     std::cout << "calibration: auto = "
-              << (found.empty() ? "none (no render of this frame in calibration/ beside it)"
-                                : found)
+              << (calibration.empty() ? "none (no render of this frame in calibration/ beside it)"
+                                      : calibration)
               << "\n";
-  }
   std::cout << "outputs:\n";
   for (const auto& o : known_outputs()) {
     Params one = p;
