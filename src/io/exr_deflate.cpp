@@ -91,6 +91,23 @@ void convert(const Bytes& bytes, size_t line_bytes, size_t width, size_t row0, s
       float* out = p.target->dst + (row0 + r) * width * stride;  // no float target when kept
       if (bytes.split && p.type == Imf::HALF) {                  // the common case, eight at a time
         split_halves_to_floats(bytes.lo + j0 / 2, bytes.hi + j0 / 2, width, out, stride);
+      } else if (bytes.split) {
+        // FLOAT or UINT: j0 is even, so sample x's four bytes are lo[2x], hi[2x], lo[2x + 1]
+        // and hi[2x + 1] of the halves from j0 / 2 (Bytes::sample without its test a byte).
+        const unsigned char* lo = bytes.lo + j0 / 2;
+        const unsigned char* hi = bytes.hi + j0 / 2;
+        auto word = [&](size_t x) {
+          return uint32_t(lo[2 * x]) | uint32_t(hi[2 * x]) << 8 | uint32_t(lo[2 * x + 1]) << 16 |
+                 uint32_t(hi[2 * x + 1]) << 24;
+        };
+        if (p.type == Imf::FLOAT) {
+          for (size_t x = 0; x < width; ++x) {
+            const uint32_t v = word(x);
+            std::memcpy(out + x * stride, &v, 4);
+          }
+        } else {
+          for (size_t x = 0; x < width; ++x) out[x * stride] = float(word(x));
+        }
       } else {
         for (size_t x = 0; x < width; ++x)
           out[x * stride] = to_float(bytes.sample(j0 + x * size, size), p.type);
