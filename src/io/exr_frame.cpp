@@ -11,6 +11,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <limits>
 #include <optional>
 #include <sstream>
 
@@ -335,6 +336,15 @@ void read_channels(const InputFrame& f, const std::vector<FieldTarget>& fields) 
 // The largest magnitudes read_fields takes (see exr_frame.h).
 constexpr float kMaxColour = 1e9f, kMaxAlbedo = 1e3f, kMaxMotion = 1e6f;
 
+// Whether every one of v's n values lies in [lo, hi] (a NaN does not): one pass without a
+// branch a value, which the compiler vectorises, before the loops that say which value is
+// wrong and how.
+bool all_within(const float* v, size_t n, float lo, float hi) {
+  unsigned ok = 1;
+  for (size_t i = 0; i < n; ++i) ok &= unsigned(v[i] >= lo) & unsigned(v[i] <= hi);
+  return ok != 0;
+}
+
 [[noreturn]] void bad_value(const InputFrame& f, int channel, size_t i, float v,
                             const std::string& what) {
   std::ostringstream s;
@@ -411,10 +421,13 @@ GBuffer read_fields(const InputFrame& f, const std::vector<std::string>& fields,
     const float* v = targets[k].dst;
     const size_t m = idx.size(), count = n * m;
     if (const std::uint16_t* bits = targets[k].half) {
-      for (size_t i = 0; i < count; ++i)
+      unsigned special = 0;  // exponent all ones somewhere, found without a branch a value
+      for (size_t i = 0; i < count; ++i) special |= unsigned((bits[i] & 0x7c00u) == 0x7c00u);
+      for (size_t i = 0; special && i < count; ++i)
         if ((bits[i] & 0x7c00u) == 0x7c00u)  // exponent all ones: infinity or NaN
           bad_value(f, idx[i % m], i / m, half_to_float(bits[i]), "non-finite " + field);
     } else if (field == "depth" || field == "backdepth") {
+      if (all_within(v, count, 0.f, std::numeric_limits<float>::max())) continue;
       for (size_t i = 0; i < count; ++i) {
         if (!std::isfinite(v[i])) bad_value(f, idx[0], i, v[i], "non-finite " + field);
         if (v[i] < 0) bad_value(f, idx[0], i, v[i], "negative " + field);
@@ -422,6 +435,7 @@ GBuffer read_fields(const InputFrame& f, const std::vector<std::string>& fields,
     } else if (field == "alpha") {
       // Any finite value is taken (only alpha > 0 matters, gbuffer.h); it becomes the
       // composite's alpha, so a NaN or an infinity would reach the output.
+      if (all_within(v, count, -kMaxColour, kMaxColour)) continue;
       for (size_t i = 0; i < count; ++i) {
         if (!std::isfinite(v[i])) bad_value(f, idx[0], i, v[i], "non-finite alpha");
         if (std::abs(v[i]) > kMaxColour) bad_value(f, idx[0], i, v[i], "alpha beyond +-1e9");
@@ -429,17 +443,19 @@ GBuffer read_fields(const InputFrame& f, const std::vector<std::string>& fields,
     } else if (field == "vector") {
       // Blender: the previous-frame position of pixel (col, row), rows top-down, is
       // (col + X, row − Y) (samples/README.md); stored as the raster offset (X, −Y).
-      for (size_t i = 0; i < count; ++i) {
-        if (!std::isfinite(v[i])) bad_value(f, idx[i % 2], i / 2, v[i], "non-finite vector");
-        if (std::abs(v[i]) > kMaxMotion)
-          bad_value(f, idx[i % 2], i / 2, v[i], "vector beyond +-1e6 pixels");
-      }
+      if (!all_within(v, count, -kMaxMotion, kMaxMotion))
+        for (size_t i = 0; i < count; ++i) {
+          if (!std::isfinite(v[i])) bad_value(f, idx[i % 2], i / 2, v[i], "non-finite vector");
+          if (std::abs(v[i]) > kMaxMotion)
+            bad_value(f, idx[i % 2], i / 2, v[i], "vector beyond +-1e6 pixels");
+        }
       for (size_t i = 1; i < count; i += 2) g.motion[i] = -g.motion[i];
     } else {
       // Normal, position and colour passes. The bounds keep every product of them (an albedo times
       // light, for each bounce) finite in float; no render comes near them.
       const bool albedo = field.size() > 3 && field.compare(field.size() - 3, 3, "col") == 0;
       const float bound = albedo ? kMaxAlbedo : kMaxColour;
+      if (all_within(v, count, -bound, bound)) continue;
       const std::string what = "non-finite " + field;
       const std::string beyond = field + (albedo ? " beyond +-1000 (an albedo)" : " beyond +-1e9");
       for (size_t i = 0; i < count; ++i) {
