@@ -615,6 +615,23 @@ TEST_F(Cli, LogJsonRecordsEachFrameAndTheEnd) {
   EXPECT_EQ(v[4]["exit"], 0);
   EXPECT_EQ(v[4]["written"], 3);
   EXPECT_FALSE(v[4].contains("error"));
+  // The rate after the first frame: the 2 intervals between the 3 frames finished, which the
+  // whole run (its start and the first frame's reading and computing too) outlasts.
+  const double after_first = v[4]["seconds_per_frame_after_first"].get<double>();
+  EXPECT_GT(after_first, 0.0);
+  EXPECT_LT(2 * after_first, v[4]["seconds"].get<double>());
+  // A single frame has no such rate: null in the log, and not in the summary.
+  const RunResult one =
+      hbil(run_args(test::kRoomPoles + "/frame_####.exr", path("one/f_####.exr"),
+                    "--frames 2 --no-display --log-json " + q(path("one.jsonl"))));
+  ASSERT_EQ(one.code, 0) << one.err;
+  EXPECT_TRUE(log_lines(path("one.jsonl")).back()["seconds_per_frame_after_first"].is_null());
+  EXPECT_TRUE(contains(one.err, "hbil: 1 frame, ")) << one.err;
+  EXPECT_FALSE(contains(one.err, "after the first")) << one.err;
+  const RunResult two = hbil(run_args(test::kRoomPoles + "/frame_####.exr", path("two/f_####.exr"),
+                                      "--frames 2-3 --no-display"));
+  ASSERT_EQ(two.code, 0) << two.err;
+  EXPECT_TRUE(contains(two.err, " s a frame after the first")) << two.err;
 
   // A second run appends; one that fails logs its exit status and what it wrote, here frame 1.
   copy_frame(1);

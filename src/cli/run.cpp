@@ -9,6 +9,7 @@
 #include <ctime>
 #include <iostream>
 #include <memory>
+#include <mutex>
 #include <set>
 #include <sstream>
 
@@ -171,6 +172,18 @@ void run_frames(const RunOptions& o, io::RunLog& log, int& written) {
   const size_t nframes = job.plan().frames.size(), npreroll = job.plan().preroll.size();
   using Clock = std::chrono::steady_clock;
   const auto start = Clock::now();
+  // When each frame was finished (its files in place, or computed for the pre-roll or the
+  // history alone): the time from the first to the last, a frame at a time, is the rate of a
+  // long shot, without the start-up and the first frame's reading, which the whole run's rate
+  // holds once. (Frames are written on a thread of their own: a lock.)
+  std::mutex finish_lock;
+  Clock::time_point first_finished{}, last_finished{};
+  size_t finished = 0;
+  auto finish = [&] {
+    const std::lock_guard<std::mutex> lock(finish_lock);
+    last_finished = Clock::now();
+    if (finished++ == 0) first_finished = last_finished;
+  };
 
   // Each frame's files are renamed into place as soon as they are complete (frame_output.h);
   // an interrupt removes the temporaries in flight, and a killed run's are removed here.
@@ -229,6 +242,7 @@ void run_frames(const RunOptions& o, io::RunLog& log, int& written) {
            {"reprojection", history ? nlohmann::ordered_json(r.report.reprojection) : nullptr},
            {"files", files}});
     });
+    finish();
   };
   hooks.delivered = [&](const pipeline::FrameResult& r) {
     if (o.verbose) {
@@ -266,6 +280,7 @@ void run_frames(const RunOptions& o, io::RunLog& log, int& written) {
     log.write("warning", {{"frame", frame}, {"message", message}});
   };
   hooks.preroll_done = [&](int frame, size_t k, size_t n, double seconds) {
+    finish();
     log.write("preroll", {{"frame", frame}, {"index", k}, {"of", n}, {"seconds", seconds}});
     if (o.quiet) return;
     char line[256];
@@ -303,6 +318,7 @@ void run_frames(const RunOptions& o, io::RunLog& log, int& written) {
     std::cerr << clear << line;
   };
   hooks.history_only = [&](int frame, double seconds) {
+    finish();
     log.write("history", {{"frame", frame}, {"seconds", seconds}});
     if (o.quiet) return;
     char line[256];
@@ -323,18 +339,29 @@ void run_frames(const RunOptions& o, io::RunLog& log, int& written) {
     throw;
   }
   const double total = std::chrono::duration<double>(Clock::now() - start).count();
+  const double after_first =
+      finished < 2 ? 0
+                   : std::chrono::duration<double>(last_finished - first_finished).count() /
+                         double(finished - 1);
   log.write("end", {{"exit", 0},
                     {"written", written},
                     {"skipped", done.size()},
                     {"seconds", total},
-                    {"seconds_per_frame", total / double(nframes + npreroll)}});
+                    {"seconds_per_frame", total / double(nframes + npreroll)},
+                    {"seconds_per_frame_after_first",  // null below 2 frames finished
+                     finished < 2 ? nlohmann::ordered_json(nullptr)
+                                  : nlohmann::ordered_json(after_first)}});
   if (!o.quiet) {
-    char line[256];
+    char line[320];
     const std::string pre = npreroll == 0 ? "" : " (+" + std::to_string(npreroll) + " pre-roll)";
     const std::string skipped =
         done.empty() ? "" : " (" + std::to_string(done.size()) + " done before, not written)";
-    std::snprintf(line, sizeof line, "hbil: %zu frames%s%s, %.3f s per frame, %.2f s in all",
-                  nframes, pre.c_str(), skipped.c_str(), total / double(nframes + npreroll), total);
+    char rate[96] = "";
+    if (finished >= 2)
+      std::snprintf(rate, sizeof rate, "; %.3f s a frame after the first", after_first);
+    std::snprintf(line, sizeof line, "hbil: %zu frame%s%s%s, %.3f s per frame, %.2f s in all%s",
+                  nframes, nframes == 1 ? "" : "s", pre.c_str(), skipped.c_str(),
+                  total / double(nframes + npreroll), total, rate);
     std::cerr << (tty ? "\n" : "") << line << "\n";
   }
 }
