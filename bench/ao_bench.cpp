@@ -15,7 +15,8 @@
 // default; 1: every pixel). BM_March times the march alone (the kernel), BM_Frame the whole
 // single-frame computation (default outputs or ao + bentcone), BM_Read the reading of the frame's
 // fields for them (what `hbil run -v` reports as "read"; file MB/s counts the whole file, every
-// channel of which is decompressed).
+// channel of which is decompressed), BM_Reproject the temporal chain's reprojection of its
+// history into the frame.
 #include <benchmark/benchmark.h>
 
 #include <cstdlib>
@@ -24,6 +25,7 @@
 #include "hbil/ao_frame.h"
 #include "hbil/interleave.h"
 #include "hbil/reduced.h"
+#include "hbil/reproject.h"
 #include "io/camera_io.h"
 #include "io/exr_frame.h"
 
@@ -197,6 +199,34 @@ void BM_Frame(benchmark::State& state) {
                                                    benchmark::Counter::kIsIterationInvariantRate);
   state.SetLabel(std::to_string(f.g.width) + "x" + std::to_string(f.g.height));
 }
+// The temporal chain's reprojection through the motion vectors (reproject_gather) of a history
+// of 6 channels (ao + bentcone) or 9 (with irradiance): the frame's view-space G-buffer stands
+// for the previous one too, with its own Vector pass (the cost does not depend on the values).
+void BM_Reproject(benchmark::State& state) {
+  const int channels = int(state.range(0));
+  Params p;
+  const Frame& f = frame();
+  const ViewGBuffer v = make_view_gbuffer(f.g, f.cam, p);
+  const std::vector<float> motion =
+      f.g.motion.empty() ? std::vector<float>(2 * v.pixels(), 0.25f) : f.g.motion;
+  std::vector<float> history(v.pixels() * size_t(channels));
+  for (size_t i = 0; i < history.size(); ++i) history[i] = float(i % 97) / 97.f;
+  const ReprojectTolerance tol{float(p.history_depth_tolerance), float(p.history_normal_cos)};
+  for (auto _ : state) {
+    Reprojected r = reproject_gather(v, f.cam, history, channels, v, f.cam, motion, tol);
+    benchmark::DoNotOptimize(r.value.data());
+  }
+  state.counters["Mpixels/s"] =
+      benchmark::Counter(double(v.pixels()) * 1e-6, benchmark::Counter::kIsIterationInvariantRate);
+  state.SetLabel(std::to_string(v.width) + "x" + std::to_string(v.height));
+}
+BENCHMARK(BM_Reproject)
+    ->ArgNames({"channels"})
+    ->Args({6})
+    ->Args({9})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
 // Reading the fields one frame's outputs need (open_frame + read_fields), from the page cache.
 void BM_Read(benchmark::State& state) {
   Params p;
