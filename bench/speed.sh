@@ -14,7 +14,8 @@
 # the median over frames and runs of the -v line's read / camera / compute / write times (the
 # stages overlap: a frame is read and the previous one written while it computes, so they add
 # up to more than the wall time); "s/frame" is the median of the runs' summary lines (wall
-# clock, all frames); peak RSS from /usr/bin/time.
+# clock, all frames), "after first" the median of their seconds a frame after the first (a
+# long shot's rate); peak RSS from /usr/bin/time.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 hbil=${1:-build/hbil}
@@ -31,8 +32,8 @@ sets=("default outputs + PNG|" "ao + bentcone|--no-display --set outputs=[\"ao\"
 bins=("$hbil")
 [ -n "$base" ] && bins+=("$base")
 
-echo "| resolution | outputs | binary | read ms | camera ms | compute ms | write ms | s/frame | peak RSS MB |"
-echo "|---|---|---|---|---|---|---|---|---|"
+echo "| resolution | outputs | binary | read ms | camera ms | compute ms | write ms | s/frame | after first | peak RSS MB |"
+echo "|---|---|---|---|---|---|---|---|---|---|"
 for input in "${inputs[@]}"; do
   res=${input%%|*} pattern=${input#*|}
   for set in "${sets[@]}"; do
@@ -54,11 +55,12 @@ text = open(sys.argv[1]).read()
 st = {k: [float(v) for v in re.findall(k + r" (\d+) ms", text)]
       for k in ("read", "camera", "compute", "write")}
 spf = [float(v) for v in re.findall(r"([0-9.]+) s per frame", text)]
+after = [float(v) for v in re.findall(r"([0-9.]+) s a frame after the first", text)]
 peak = [int(v) for v in re.findall(r"PEAK_KB (\d+)", text)]
 med = lambda v: statistics.median(v) if v else float("nan")
-print("| %s | %s | %s | %.0f | %.0f | %.0f | %.0f | %.3f | %.0f |" % (
+print("| %s | %s | %s | %.0f | %.0f | %.0f | %.0f | %.3f | %.3f | %.0f |" % (
     sys.argv[2], sys.argv[3], sys.argv[4], med(st["read"]), med(st["camera"]),
-    med(st["compute"]), med(st["write"]), med(spf), max(peak) / 1024))
+    med(st["compute"]), med(st["write"]), med(spf), med(after), max(peak) / 1024))
 PY
     done
   done
