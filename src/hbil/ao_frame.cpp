@@ -128,12 +128,16 @@ HorizonImage search_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& 
   // result is upsampled to v (reduced.h).
   const int f = effective_search_scale(p, v.width, v.height);
   const float tol = float(p.depth_tolerance);
-  const ViewGBuffer lo = f > 1 ? reduce_view(v, f) : ViewGBuffer{};
+  ViewGBuffer own_lo;
+  if (f > 1 && !in.reduced) own_lo = reduce_view(v, f);
+  const ViewGBuffer& lo = in.reduced ? *in.reduced : own_lo;
   const ViewGBuffer& sv = f > 1 ? lo : v;
-  UpsamplePlan plan;  // with later bounces (f > 1): which texels each pixel takes
+  const bool keep_reduced = in.keep_reduced && f > 1;
+  UpsamplePlan own_plan;  // with later bounces (f > 1): which texels each pixel takes
+  const UpsamplePlan* plan = in.plan;
   // `radiance` (or null) is released once the search has what it reads of it.
   // `irradiance_only`: a later bounce, whose occlusion is the first's; only its irradiance is
-  // filtered and upsampled.
+  // filtered (and upsampled).
   auto search = [&](std::vector<Vec3>* radiance, bool irradiance_only) {
     std::vector<Vec3> reduced;
     if (f > 1 && radiance) {
@@ -150,11 +154,13 @@ HorizonImage search_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& 
       std::vector<Vec3>().swap(h.bent);
     }
     if (p.interleave && p.spatial_filter) h = spatial_filter(sv, h, tol, p.vectorised);
+    return h;
+  };
+  auto upsample = [&](HorizonImage h) {
     if (f == 1) return h;
     // The texels each pixel takes are the same for every bounce: decided once.
-    if (gather && p.bounces > 1 && plan.choice.empty()) plan = plan_upsample(v, lo, f, tol);
-    return plan.choice.empty() ? upsample_horizon(v, lo, f, h, tol)
-                               : upsample_horizon(v, lo, plan, h);
+    if (!plan && gather && p.bounces > 1) plan = &(own_plan = plan_upsample(v, lo, f, tol));
+    return plan ? upsample_horizon(v, lo, *plan, h) : upsample_horizon(v, lo, f, h, tol);
   };
   // Bounce k gathers the outgoing radiance of bounce k − 1 (bounce 0: direct light and
   // Emit where the gather takes it, plus the previous frame's indirect light when the temporal
@@ -217,18 +223,26 @@ HorizonImage search_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& 
       std::vector<Vec3>().swap(in.feedback);
       h = HorizonImage{};
     }
+    const bool last = bounce + 1 == bounces;
     h = search(gather ? &L : nullptr, bounce > 0);
-    if (bounce == 0 && bounces > 1) {
+    // keep_reduced: the first bounce's occlusion stays on the texels, as the last bounce does.
+    if (keep_reduced && bounce == 0 && bounces > 1) {
       occlusion.ao = std::move(h.ao);
       occlusion.vis = std::move(h.vis);
       occlusion.bent = std::move(h.bent);
     }
-    if (bounce + 1 == bounces && bounces > 1) {
+    if (!(keep_reduced && last)) h = upsample(std::move(h));
+    if (!keep_reduced && bounce == 0 && bounces > 1) {
+      occlusion.ao = std::move(h.ao);
+      occlusion.vis = std::move(h.vis);
+      occlusion.bent = std::move(h.bent);
+    }
+    if (last && bounces > 1) {
       h.ao = std::move(occlusion.ao);
       h.vis = std::move(occlusion.vis);
       h.bent = std::move(occlusion.bent);
     }
-    if (fresnel)
+    if (fresnel && !(keep_reduced && last))
       for (size_t i = 0; i < h.irradiance.size(); ++i) {
         const Vec3 w = diffuse_weight(g, i);
         Vec3& e = h.irradiance[i];

@@ -12,6 +12,7 @@
 #include "hbil/interleave.h"
 #include "hbil/params.h"
 #include "hbil/radiance_cache.h"
+#include "hbil/reduced.h"
 
 namespace hbil {
 
@@ -70,6 +71,15 @@ struct FrameInputs {
   // A calibrated fill level per surface (fill_tiles.h), or null: each searched pixel's fill
   // is multiplied by its factor at the pixel's world position.
   const FillTiles* tiles = nullptr;
+  // A reduced search (search_scale f > 1) for a caller that works on its texels (the temporal
+  // chain): the last bounce is returned on the texels of reduce_view(v, f), neither upsampled
+  // nor weighted by diffuse_weight (the caller does both once it has blended them). Earlier
+  // bounces are upsampled and weighted as always, since their irradiance lights the next.
+  bool keep_reduced = false;
+  // reduce_view(v, f) and plan_upsample(v, *reduced, f, depth_tolerance) when the caller has
+  // them (null: made here).
+  const ViewGBuffer* reduced = nullptr;
+  const UpsamplePlan* plan = nullptr;
 };
 Params resolve_frame_outputs(const GBuffer& g, const Params& requested);
 // unseen_radiance "auto" = auto_unseen_factor(unseen_carry) x the mean over the frame's

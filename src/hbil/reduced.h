@@ -65,5 +65,9 @@ UpsamplePlan plan_upsample(const ViewGBuffer& v, const ViewGBuffer& lo, int f,
 // upsample_horizon by a plan: the same result to the bit.
 HorizonImage upsample_horizon(const ViewGBuffer& v, const ViewGBuffer& lo, const UpsamplePlan& plan,
                               const HorizonImage& h);
+// One value per texel of lo brought to v by a plan, as upsample_horizon brings ao; pixels the
+// plan gives no texel (background, none facing their way) get 0.
+std::vector<float> upsample_values(const ViewGBuffer& v, const ViewGBuffer& lo,
+                                   const UpsamplePlan& plan, const std::vector<float>& x);
 
 }  // namespace hbil

@@ -62,7 +62,8 @@ Reprojected reproject_scatter(const ViewGBuffer& prev, const Camera& prev_cam,
       if (!(pc.z > 0) || !std::isfinite(pc.z)) continue;
       double u, v;
       cur_cam.project(pc, u, v);
-      const double col = std::floor(u), row = std::floor(v);
+      // The pixel, or on a reduced grid (scale f: reduce_view) the texel of its f x f block.
+      const double col = std::floor(u / cur.scale), row = std::floor(v / cur.scale);
       if (!(col >= 0 && col < cur.width && row >= 0 && row < cur.height)) continue;
       target[s] = int64_t(row) * cur.width + int64_t(col);
       target_z[s] = pc.z;

@@ -45,6 +45,8 @@ struct ReprojectTolerance {
 // unchanged (nearest neighbour, no interpolation). Splat gaps (magnification, disocclusion)
 // stay invalid: fill them with push_pull (pushpull.h).
 // prev_value must hold prev.pixels() * channels floats; prev and cur may differ in size.
+// A reduced cur (ViewGBuffer::scale f > 1, reduce_view) has a texel per f x f block of the
+// camera's pixels: a point lands on the texel whose block holds its raster position.
 Reprojected reproject_scatter(const ViewGBuffer& prev, const Camera& prev_cam,
                               const std::vector<float>& prev_value, int channels,
                               const ViewGBuffer& cur, const Camera& cur_cam,

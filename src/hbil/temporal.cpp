@@ -10,6 +10,7 @@
 
 #include "hbil/error.h"
 #include "hbil/pushpull.h"
+#include "hbil/reduced.h"
 #include "hbil/reproject.h"
 
 namespace hbil {
@@ -120,13 +121,22 @@ AoFrame TemporalChain::run(const GBuffer& g, GBuffer* release, const Camera& cam
              (release->normal[i].x == 0 && release->normal[i].y == 0 && release->normal[i].z == 0);
     if (zero) std::vector<Vec3>().swap(release->normal);
   }
-  const size_t n_px = v.pixels();
+  // With a reduced search (search_scale f > 1) the chain works on the searched texels
+  // (reduce_view): it reprojects, fills, and blends them with their history, and the blend is
+  // upsampled to the frame's pixels once, at the end. `cv` is the grid it works on.
+  const int f = effective_search_scale(p_, v.width, v.height);
+  const float depth_tol = float(p_.depth_tolerance);
+  ViewGBuffer lo = f > 1 ? reduce_view(v, f) : ViewGBuffer{};
+  const ViewGBuffer& cv = f > 1 ? lo : v;
+  UpsamplePlan plan;
+  if (f > 1) plan = plan_upsample(v, lo, f, depth_tol);
+  const size_t n_px = cv.pixels();
   size_t geometry = 0;
-  for (size_t i = 0; i < n_px; ++i) geometry += !v.is_background(i);
+  for (size_t i = 0; i < n_px; ++i) geometry += !cv.is_background(i);
 
   // Cut detection before anything is reprojected.
   rep.first = !has_history_;
-  if (has_history_ && (view_.width != v.width || view_.height != v.height))
+  if (has_history_ && (width_ != v.width || height_ != v.height))
     cut = true, rep.cut_reason = "resolution changed";
   if (cut && rep.cut_reason.empty()) rep.cut_reason = "given";
   if (has_history_ && !cut) {
@@ -150,8 +160,22 @@ AoFrame TemporalChain::run(const GBuffer& g, GBuffer* release, const Camera& cam
     const bool vector = p_.reprojection == "vector" ||
                         (p_.reprojection == "auto" && !g.motion.empty() && frame == frame_ + 1);
     rep.reprojection = vector ? "vector" : "scatter";
-    r = vector ? reproject_gather(view_, cam_, data_, channels, v, cam, g.motion, tol)
-               : reproject_scatter(view_, cam_, data_, channels, v, cam, tol);
+    if (vector && f > 1) {
+      // Each texel's motion is its own pixel's, in texels.
+      std::vector<float> motion(2 * n_px);
+      const float inv_f = 1.f / float(f);
+      tbb::parallel_for(0, cv.height, [&](int j) {
+        for (int i = 0; i < cv.width; ++i) {
+          const size_t k = size_t(j) * cv.width + i, src = size_t(f * j) * v.width + f * i;
+          motion[2 * k] = g.motion[2 * src] * inv_f;
+          motion[2 * k + 1] = g.motion[2 * src + 1] * inv_f;
+        }
+      });
+      r = reproject_gather(view_, cam_, data_, channels, cv, cam, motion, tol);
+    } else {
+      r = vector ? reproject_gather(view_, cam_, data_, channels, cv, cam, g.motion, tol)
+                 : reproject_scatter(view_, cam_, data_, channels, cv, cam, tol);
+    }
     size_t accepted = 0;
     for (size_t i = 0; i < n_px; ++i) accepted += r.valid[i] != 0;
     rep.history = geometry ? double(accepted) / double(geometry) : 0;
@@ -183,6 +207,21 @@ AoFrame TemporalChain::run(const GBuffer& g, GBuffer* release, const Camera& cam
   in.frame = frame;
   if (reads_cache) in.cache = &cache_;
   in.tiles = tiles_;
+  if (f > 1) {
+    in.keep_reduced = true;
+    in.reduced = &lo;
+    in.plan = &plan;
+  }
+  const bool fresnel = !g.f0.empty() || !g.metallic.empty();
+  // The diffuse weight (diffuse_weight) of each pixel on an upsampled irradiance: the texels
+  // hold the light that reaches them, and each pixel reflects its own share of it.
+  auto weight = [&](std::vector<Vec3>& e) {
+    if (!fresnel) return;
+    tbb::parallel_for(size_t(0), e.size(), [&](size_t i) {
+      const Vec3 w = diffuse_weight(g, i);
+      e[i] = Vec3{w.x * e[i].x, w.y * e[i].y, w.z * e[i].z};
+    });
+  };
   std::vector<Vec3>& feedback = in.feedback;
   if (history && gather && p_.feedback) {
     std::vector<float> e(3 * n_px), depth(n_px);
@@ -191,17 +230,25 @@ AoFrame TemporalChain::run(const GBuffer& g, GBuffer* release, const Camera& cam
     const size_t e_at = window > 0 ? size_t(per_chain) * chains : 0;
     for (size_t i = 0; i < n_px; ++i) {
       for (int c = 0; c < 3; ++c) e[3 * i + c] = r.value[size_t(channels) * i + e_at + c];
-      depth[i] = v.is_background(i) ? float(kBackgroundLimit) * 10 : v.position[i].z;
+      depth[i] = cv.is_background(i) ? float(kBackgroundLimit) * 10 : cv.position[i].z;
     }
     std::vector<uint8_t> filled;
     if (p_.push_pull)
-      e = push_pull(v.width, v.height, 3, e, r.valid, depth, float(p_.history_depth_tolerance),
+      e = push_pull(cv.width, cv.height, 3, e, r.valid, depth, float(p_.history_depth_tolerance),
                     &filled);
     size_t n_filled = 0;
     for (size_t i = 0; i < n_px; ++i) n_filled += !filled.empty() && filled[i];
     rep.filled = geometry ? double(n_filled) / double(geometry) : 0;
     feedback.resize(n_px);
     for (size_t i = 0; i < n_px; ++i) feedback[i] = Vec3{e[3 * i], e[3 * i + 1], e[3 * i + 2]};
+    if (f > 1) {  // to the pixels, whose DiffCol makes the source radiance
+      HorizonImage fb;
+      fb.width = cv.width;
+      fb.height = cv.height;
+      fb.irradiance = std::move(feedback);
+      feedback = std::move(upsample_horizon(v, lo, plan, fb).irradiance);
+      weight(feedback);
+    }
   }
 
   // The colour fields as floats from here on: the history and the feedback's temporaries
@@ -212,6 +259,7 @@ AoFrame TemporalChain::run(const GBuffer& g, GBuffer* release, const Camera& cam
   HorizonImage h = history ? search_frame(v, g, cam, p_, std::move(in))
                            : search_frame(v, g, cam, resolve_auto_slices(p_, false), std::move(in));
   std::vector<float>().swap(v.thickness);  // only the search reads it
+  std::vector<float>().swap(lo.thickness);
 
   // Accumulation with the history; the result becomes the next frame's history. It is
   // written over the reprojected history in place (each pixel reads its history before it
@@ -228,10 +276,10 @@ AoFrame TemporalChain::run(const GBuffer& g, GBuffer* release, const Camera& cam
   }
   const float wt_sum = wt[0] + wt[1];
   std::vector<float> n_out(p_.wants("history") ? n_px : 0);
-  tbb::parallel_for(0, v.height, [&](int y) {
-    for (int x = 0; x < v.width; ++x) {
-      const size_t i = size_t(y) * v.width + x;
-      if (v.is_background(i)) continue;
+  tbb::parallel_for(0, cv.height, [&](int y) {
+    for (int x = 0; x < cv.width; ++x) {
+      const size_t i = size_t(y) * cv.width + x;
+      if (cv.is_background(i)) continue;
       // This frame's values; each chain blends them with its history, and the output is
       // the chain's (or the chains' blend).
       const Vec3 e_cur = has_e ? h.irradiance[i] : Vec3{};
@@ -290,10 +338,17 @@ AoFrame TemporalChain::run(const GBuffer& g, GBuffer* release, const Camera& cam
       if (!n_out.empty()) n_out[i] = n_sum;
     }
   });
+  if (f > 1) {  // the blend, to the pixels
+    h = upsample_horizon(v, lo, plan, h);
+    if (has_e) weight(h.irradiance);
+    if (!n_out.empty()) n_out = upsample_values(v, lo, plan, n_out);
+  }
   if (cache && has_e) cache_.add(v, cam, g, h.irradiance, frame);
   AoFrame out = assemble_frame(v, g, cam, p_, std::move(h), environment, release);
   if (p_.wants("history")) out.history = std::move(n_out);
-  view_ = std::move(v);
+  width_ = v.width;
+  height_ = v.height;
+  view_ = f > 1 ? std::move(lo) : std::move(v);
   cam_ = cam;
   frame_ = frame;
   data_ = std::move(next);

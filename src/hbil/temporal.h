@@ -10,6 +10,13 @@
 //
 // Only one frame of history is resident, whatever the length of the sequence.
 //
+// With a reduced search (search_scale f > 1, reduced.h) the chain works on the searched
+// texels: the history holds one texel per f x f block, is reprojected onto the frame's texels
+// (a Vector pass's motion taken at each texel's own pixel, divided by f), filled and blended
+// there, and the blend is upsampled to every pixel once; the fed-back irradiance is upsampled
+// before it meets each pixel's DiffCol. The texels hold the light that reaches them: each
+// pixel's diffuse weight (diffuse_weight) is applied to it after the upsample.
+//
 // Accumulation: a pixel whose history was accepted (depth within history_depth_tolerance,
 // normal within history_normal_cos) has n = min(n_prev + 1, history_max) frames and blends
 // x = lerp(x_history, x_current, max(1/n, 1 − history_weight)): a plain mean until the history
@@ -48,7 +55,7 @@ struct TemporalReport {
   std::string cut_reason;    // "given", or what was detected; "" when no cut
   bool first = false;        // no history before this frame (first frame of the run)
   std::string reprojection;  // "scatter" or "vector" ("" without history)
-  double history = 0;        // fraction of geometry pixels with accepted history
+  double history = 0;        // fraction of geometry pixels (texels) with accepted history
   double filled = 0;         // fraction filled by push/pull (feedback only)
 };
 
@@ -104,9 +111,10 @@ class TemporalChain {
               const SH9* environment, TemporalReport* report);
   Params p_;
   bool has_history_ = false;
-  ViewGBuffer view_;         // the history's view-space G-buffer
-  Camera cam_;               // and camera
-  int frame_ = 0;            // and frame number
+  int width_ = 0, height_ = 0;  // the history's frame size
+  ViewGBuffer view_;  // the history's view-space G-buffer (its searched texels, search_scale > 1)
+  Camera cam_;        // and camera
+  int frame_ = 0;     // and frame number
   std::vector<float> data_;  // the history channels per pixel (see above)
   const FillTiles* tiles_ = nullptr;
   RadianceCache cache_;  // what the last frames (and those ahead) showed

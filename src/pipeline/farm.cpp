@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "hbil/error.h"
+#include "hbil/reduced.h"
 #include "hbil/scene_scale.h"
 #include "hbil/temporal.h"
 #include "io/exr_frame.h"
@@ -122,9 +123,13 @@ FarmPlan make_farm_plan(const FarmRequest& r, const Params& requested) {
   plan.width = job.first().spec.width;
   plan.height = job.first().spec.height;
   plan.memory_mb = run_memory_mb(plan.width, plan.height);
-  // history_window keeps 12 more floats of history a pixel, twice while it is reprojected.
-  if (p.temporal && p.history_window > 0)
-    plan.memory_mb += int(std::ceil(2.0 * 12 * 4 * plan.width * double(plan.height) / 1e6));
+  // history_window keeps 12 more floats of history a searched pixel (1 in f x f with
+  // search_scale f), twice while it is reprojected.
+  if (p.temporal && p.history_window > 0) {
+    const int f = effective_search_scale(p, plan.width, plan.height);
+    const double texels = double((plan.width + f - 1) / f) * double((plan.height + f - 1) / f);
+    plan.memory_mb += int(std::ceil(2.0 * 12 * 4 * texels / 1e6));
+  }
   if (r.preroll == "auto") {
     plan.preroll = seam_preroll(p, &plan.preroll_why);
   } else {
