@@ -223,6 +223,28 @@ TEST(ReducedSearch, UpsampleOfASmoothFieldIsBilinear) {
       EXPECT_NEAR(up.ao[size_t(y) * v.width + x], 0.005f * x + 0.05f * y, 1e-6) << x << "," << y;
 }
 
+// A count (the chain's history length) keeps whole numbers: each pixel takes the texel it
+// weighs most, here on two planes: (x, y) takes texel (x / 2, y / 2) (a tie of weights goes
+// to the first), except where that texel lies on the other plane.
+TEST(ReducedSearch, ACountIsUpsampledToTheTexelWeighedMost) {
+  ViewGBuffer v = two_planes(12, 6, 5);
+  v.position[size_t(5) * v.width + 11].z = ViewGBuffer::kBackground;  // one background pixel
+  const ViewGBuffer lo = reduce_view(v, 2);
+  std::vector<float> count(lo.pixels());
+  for (size_t k = 0; k < count.size(); ++k) count[k] = float(k + 1);
+  const UpsamplePlan plan = plan_upsample(v, lo, 2, 0.05f);
+  const std::vector<float> up = upsample_count(v, lo, plan, count);
+  ASSERT_EQ(up.size(), v.pixels());
+  EXPECT_EQ(up[size_t(5) * v.width + 11], 0.f);
+  for (int y = 0; y < v.height; ++y)
+    for (int x = 0; x < v.width; ++x) {
+      if (y == 5 && x == 11) continue;
+      // x = 5 is on the far plane, its texel (x = 4) on the near one: it takes texel x = 6.
+      const int i = x == 5 ? 3 : x / 2, j = y / 2;
+      EXPECT_EQ(up[size_t(y) * v.width + x], count[size_t(j) * lo.width + i]) << x << "," << y;
+    }
+}
+
 // The 90-degree V-groove of horizon_test.cpp, searched on every second pixel: AO and the cone
 // keep the closed forms within the bounds of the full-resolution search.
 TEST(ReducedSearch, GrooveKeepsTheClosedForm) {

@@ -165,31 +165,34 @@ HorizonImage upsample_horizon(const ViewGBuffer& v, const ViewGBuffer& lo, const
   return out;
 }
 
-std::vector<float> upsample_values(const ViewGBuffer& v, const ViewGBuffer& lo,
-                                   const UpsamplePlan& plan, const std::vector<float>& x) {
+std::vector<float> upsample_count(const ViewGBuffer& v, const ViewGBuffer& lo,
+                                  const UpsamplePlan& plan, const std::vector<float>& x) {
   std::vector<float> out(v.pixels(), 0.f);
   const int f = plan.f;
   tbb::parallel_for(0, v.height, [&](int y) {
     for (int px = 0; px < v.width; ++px) {
-      const std::uint32_t choice = plan.choice[size_t(y) * v.width + px];
-      if (choice == UpsamplePlan::kNone) continue;
-      if (!(choice & UpsamplePlan::kBilinear)) {
-        out[size_t(y) * v.width + px] = x[choice];
+      const size_t p = size_t(y) * v.width + px;
+      const std::uint32_t choice = plan.choice[p];
+      if (choice == UpsamplePlan::kNone) {
+        if (!v.is_background(p)) out[p] = 1.f;
         continue;
       }
-      // The weights of upsample_apply, renormalised as HorizonMean::store renormalises them.
+      if (!(choice & UpsamplePlan::kBilinear)) {
+        out[p] = x[choice];
+        continue;
+      }
+      // The texel of the largest bilinear weight among those on the pixel's surface (the
+      // first in the mask's order on a tie).
       const int i0 = px / f, j0 = y / f;
       const float inv_f = 1.f / float(f);
       const float tx = float(px - f * i0) * inv_f, ty = float(y - f * j0) * inv_f;
-      float sum = 0, w = 0;
+      float best = -1.f;
       for (int dj = 0; dj < 2; ++dj)
         for (int di = 0; di < 2; ++di) {
           if (!(choice & (1u << (2 * dj + di)))) continue;
           const float wk = (di ? tx : 1.f - tx) * (dj ? ty : 1.f - ty);
-          sum += wk * x[size_t(j0 + dj) * lo.width + (i0 + di)];
-          w += wk;
+          if (wk > best) best = wk, out[p] = x[size_t(j0 + dj) * lo.width + (i0 + di)];
         }
-      out[size_t(y) * v.width + px] = sum * (1.f / w);
     }
   });
   return out;

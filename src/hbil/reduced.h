@@ -65,9 +65,10 @@ UpsamplePlan plan_upsample(const ViewGBuffer& v, const ViewGBuffer& lo, int f,
 // upsample_horizon by a plan: the same result to the bit.
 HorizonImage upsample_horizon(const ViewGBuffer& v, const ViewGBuffer& lo, const UpsamplePlan& plan,
                               const HorizonImage& h);
-// One value per texel of lo brought to v by a plan, as upsample_horizon brings ao; pixels the
-// plan gives no texel (background, none facing their way) get 0.
-std::vector<float> upsample_values(const ViewGBuffer& v, const ViewGBuffer& lo,
-                                   const UpsamplePlan& plan, const std::vector<float>& x);
+// A count per texel of lo (the chain's history length) brought to v by a plan: each pixel takes
+// the value of the texel it weighs most among those the plan gives it, so that counts stay
+// whole numbers; background pixels get 0, other pixels the plan gives no texel 1.
+std::vector<float> upsample_count(const ViewGBuffer& v, const ViewGBuffer& lo,
+                                  const UpsamplePlan& plan, const std::vector<float>& x);
 
 }  // namespace hbil

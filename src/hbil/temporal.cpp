@@ -341,7 +341,7 @@ AoFrame TemporalChain::run(const GBuffer& g, GBuffer* release, const Camera& cam
   if (f > 1) {  // the blend, to the pixels
     h = upsample_horizon(v, lo, plan, h);
     if (has_e) weight(h.irradiance);
-    if (!n_out.empty()) n_out = upsample_values(v, lo, plan, n_out);
+    if (!n_out.empty()) n_out = upsample_count(v, lo, plan, n_out);
   }
   if (cache && has_e) cache_.add(v, cam, g, h.irradiance, frame);
   AoFrame out = assemble_frame(v, g, cam, p_, std::move(h), environment, release);
