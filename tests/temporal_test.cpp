@@ -407,6 +407,26 @@ TEST(TemporalTexels, EachPixelWeighsItsOwnDiffuseShareOnce) {
   EXPECT_LT(worst, 1e-6);
 }
 
+// With in-frame bounces the first bounce's occlusion stays on the texels with the last
+// bounce's light: ao is that of one bounce to the bit, and the second bounce adds light.
+TEST(TemporalTexels, InFrameBouncesKeepTheFirstBouncesOcclusion) {
+  Params one = texel_params(), two = texel_params();
+  two.bounces = 2;
+  TemporalChain a(one), b(two);
+  AoFrame fa, fb;
+  for (int frame = 1; frame <= 3; ++frame) {
+    const Scene s = groove(2 * frame);
+    fa = a.process(s.g, s.cam, frame, false);
+    fb = b.process(s.g, s.cam, frame, false);
+  }
+  ASSERT_EQ(fa.ao.size(), fb.ao.size());
+  EXPECT_EQ(0, std::memcmp(fa.ao.data(), fb.ao.data(), fa.ao.size() * sizeof(float)));
+  double ea = 0, eb = 0;
+  for (size_t i = 0; i < fa.irradiance.size(); ++i)
+    ea += fa.irradiance[i].x, eb += fb.irradiance[i].x;
+  EXPECT_GT(eb, 1.01 * ea);
+}
+
 // The same bytes for 1 and 4 threads through a turning camera.
 TEST(TemporalTexels, IdenticalBytesForAnyThreadCount) {
   Params p = texel_params();
