@@ -36,6 +36,14 @@ Vec3 diffuse_weight(const GBuffer& g, size_t i) {
   return {1.f, 1.f, 1.f};
 }
 
+void weigh_diffuse(const GBuffer& g, std::vector<Vec3>& e) {
+  if (g.f0.empty() && g.metallic.empty()) return;
+  tbb::parallel_for(size_t(0), e.size(), [&](size_t i) {
+    const Vec3 w = diffuse_weight(g, i);
+    e[i] = Vec3{w.x * e[i].x, w.y * e[i].y, w.z * e[i].z};
+  });
+}
+
 AoFrame compute_ao_frame(const GBuffer& g, const Camera& cam, const Params& p,
                          const SH9* environment, const RadianceCache* cache, int frame,
                          const FillTiles* tiles) {
@@ -213,7 +221,6 @@ HorizonImage search_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& 
     fill_map = in.cache->fill_map(sv, cam, in.frame, c.fill);
     c.fill_map = fill_map.data();
   }
-  const bool fresnel = !g.f0.empty() || !g.metallic.empty();
   const int bounces = gather ? p.bounces : 1;
   HorizonImage occlusion;  // the first bounce's ao, vis and bent, which every bounce shares
   for (int bounce = 0; bounce < bounces; ++bounce) {
@@ -225,29 +232,22 @@ HorizonImage search_frame(const ViewGBuffer& v, const GBuffer& g, const Camera& 
     }
     const bool last = bounce + 1 == bounces;
     h = search(gather ? &L : nullptr, bounce > 0);
-    // keep_reduced: the first bounce's occlusion stays on the texels, as the last bounce does.
-    if (keep_reduced && bounce == 0 && bounces > 1) {
+    // The first bounce's occlusion is kept upsampled, or with keep_reduced on the texels, as
+    // the last bounce is.
+    auto keep_occlusion = [&] {
       occlusion.ao = std::move(h.ao);
       occlusion.vis = std::move(h.vis);
       occlusion.bent = std::move(h.bent);
-    }
+    };
+    if (keep_reduced && bounce == 0 && bounces > 1) keep_occlusion();
     if (!(keep_reduced && last)) h = upsample(std::move(h));
-    if (!keep_reduced && bounce == 0 && bounces > 1) {
-      occlusion.ao = std::move(h.ao);
-      occlusion.vis = std::move(h.vis);
-      occlusion.bent = std::move(h.bent);
-    }
+    if (!keep_reduced && bounce == 0 && bounces > 1) keep_occlusion();
     if (last && bounces > 1) {
       h.ao = std::move(occlusion.ao);
       h.vis = std::move(occlusion.vis);
       h.bent = std::move(occlusion.bent);
     }
-    if (fresnel && !(keep_reduced && last))
-      for (size_t i = 0; i < h.irradiance.size(); ++i) {
-        const Vec3 w = diffuse_weight(g, i);
-        Vec3& e = h.irradiance[i];
-        e = Vec3{w.x * e.x, w.y * e.y, w.z * e.z};
-      }
+    if (!(keep_reduced && last)) weigh_diffuse(g, h.irradiance);
   }
   return h;
 }

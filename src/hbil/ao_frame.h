@@ -39,6 +39,8 @@ std::vector<Vec3> source_radiance(const GBuffer& g, const std::vector<Vec3>& irr
 // The receiver's weight on diffusely reflected light, HBIL eq. 19: 1 − F0 per channel from
 // g.f0, else 0.96 (1 − metallic) (F0 = 0.04 for dielectrics, ~1 for metals), else 1.
 Vec3 diffuse_weight(const GBuffer& g, size_t i);
+// e[i] times diffuse_weight(g, i) at every pixel; nothing where g has neither f0 nor metallic.
+void weigh_diffuse(const GBuffer& g, std::vector<Vec3>& e);
 
 // Outputs "auto" (Params::outputs) resolve to ao and bentcone, plus irradiance, indirect and
 // composite when `g` holds DiffCol and DiffDir.

@@ -46,6 +46,20 @@ ViewGBuffer reduce_view(const ViewGBuffer& v, int f) {
   return lo;
 }
 
+std::vector<float> reduce_motion(const ViewGBuffer& v, const ViewGBuffer& lo, int f,
+                                 const std::vector<float>& motion) {
+  std::vector<float> out(2 * lo.pixels());
+  const float inv_f = 1.f / float(f);
+  tbb::parallel_for(0, lo.height, [&](int j) {
+    for (int i = 0; i < lo.width; ++i) {
+      const size_t k = size_t(j) * lo.width + i, src = size_t(f * j) * v.width + f * i;
+      out[2 * k] = motion[2 * src] * inv_f;
+      out[2 * k + 1] = motion[2 * src + 1] * inv_f;
+    }
+  });
+  return out;
+}
+
 std::vector<Vec3> reduce_radiance(const ViewGBuffer& v, const ViewGBuffer& lo, int f,
                                   const std::vector<Vec3>& L, float depth_tolerance) {
   std::vector<Vec3> out(lo.pixels());
@@ -65,6 +79,19 @@ std::vector<Vec3> reduce_radiance(const ViewGBuffer& v, const ViewGBuffer& lo, i
 
 namespace {
 
+// Pixel (x, y) of a frame whose texels lie every f pixels: the texels (i0, j0) to
+// (i0 + 1, j0 + 1) around it and its bilinear weight on each.
+struct TexelCell {
+  int i0, j0;
+  float tx, ty;
+  TexelCell(int x, int y, int f) : i0(x / f), j0(y / f) {
+    const float inv_f = 1.f / float(f);
+    tx = float(x - f * i0) * inv_f;
+    ty = float(y - f * j0) * inv_f;
+  }
+  float weight(int di, int dj) const { return (di ? tx : 1.f - tx) * (dj ? ty : 1.f - ty); }
+};
+
 // What pixel (x, y) of v takes from lo (UpsamplePlan's encoding).
 std::uint32_t upsample_choice(const ViewGBuffer& v, const ViewGBuffer& lo, int f, int x, int y,
                               float depth_tolerance) {
@@ -72,14 +99,13 @@ std::uint32_t upsample_choice(const ViewGBuffer& v, const ViewGBuffer& lo, int f
   if (v.is_background(p)) return UpsamplePlan::kNone;
   const Vec3 &P = v.position[p], &n = v.normal[p];
   const float tol = depth_tolerance * P.z;
-  const int i0 = x / f, j0 = y / f;
-  const float inv_f = 1.f / float(f);
-  const float tx = float(x - f * i0) * inv_f, ty = float(y - f * j0) * inv_f;
+  const TexelCell cell(x, y, f);
+  const int i0 = cell.i0, j0 = cell.j0;
   std::uint32_t mask = 0;
   for (int dj = 0; dj < 2; ++dj)
     for (int di = 0; di < 2; ++di) {
       const int i = i0 + di, j = j0 + dj;
-      const float wk = (di ? tx : 1.f - tx) * (dj ? ty : 1.f - ty);
+      const float wk = cell.weight(di, dj);
       if (!(wk > 0.f) || i >= lo.width || j >= lo.height) continue;
       const size_t k = size_t(j) * lo.width + i;
       if (lo.is_background(k) || !same_surface(P, n, lo.position[k], lo.normal[k], tol)) continue;
@@ -106,14 +132,11 @@ void upsample_apply(std::uint32_t choice, const ViewGBuffer& v, const ViewGBuffe
   if (choice == UpsamplePlan::kNone) return;
   HorizonMean mean;
   if (choice & UpsamplePlan::kBilinear) {
-    const int i0 = x / f, j0 = y / f;
-    const float inv_f = 1.f / float(f);
-    const float tx = float(x - f * i0) * inv_f, ty = float(y - f * j0) * inv_f;
+    const TexelCell cell(x, y, f);
     for (int dj = 0; dj < 2; ++dj)
       for (int di = 0; di < 2; ++di) {
         if (!(choice & (1u << (2 * dj + di)))) continue;
-        const float wk = (di ? tx : 1.f - tx) * (dj ? ty : 1.f - ty);
-        mean.add(h, size_t(j0 + dj) * lo.width + (i0 + di), wk);
+        mean.add(h, size_t(cell.j0 + dj) * lo.width + (cell.i0 + di), cell.weight(di, dj));
       }
   } else {
     mean.add(h, choice, 1.f);
@@ -183,15 +206,13 @@ std::vector<float> upsample_count(const ViewGBuffer& v, const ViewGBuffer& lo,
       }
       // The texel of the largest bilinear weight among those on the pixel's surface (the
       // first in the mask's order on a tie).
-      const int i0 = px / f, j0 = y / f;
-      const float inv_f = 1.f / float(f);
-      const float tx = float(px - f * i0) * inv_f, ty = float(y - f * j0) * inv_f;
+      const TexelCell cell(px, y, f);
       float best = -1.f;
       for (int dj = 0; dj < 2; ++dj)
         for (int di = 0; di < 2; ++di) {
           if (!(choice & (1u << (2 * dj + di)))) continue;
-          const float wk = (di ? tx : 1.f - tx) * (dj ? ty : 1.f - ty);
-          if (wk > best) best = wk, out[p] = x[size_t(j0 + dj) * lo.width + (i0 + di)];
+          const float wk = cell.weight(di, dj);
+          if (wk > best) best = wk, out[p] = x[size_t(cell.j0 + dj) * lo.width + (cell.i0 + di)];
         }
     }
   });

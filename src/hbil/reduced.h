@@ -41,6 +41,10 @@ std::string describe_search(const Params& p, int width, int height);
 
 // Every f-th pixel of every f-th row of v (f >= 1), with scale = v.scale * f.
 ViewGBuffer reduce_view(const ViewGBuffer& v, int f);
+// The motion (GBuffer::motion, 2 floats a pixel of v) of each texel of lo = reduce_view(v, f):
+// its own pixel's, in texels (divided by f).
+std::vector<float> reduce_motion(const ViewGBuffer& v, const ViewGBuffer& lo, int f,
+                                 const std::vector<float>& motion);
 // The source radiance of each texel of `lo` (from reduce_view(v, f)): the mean of L over the
 // pixels of its f x f block of v on the texel's surface (surface_mean; its own pixel's where
 // none is, as with a degenerate normal).

@@ -161,17 +161,8 @@ AoFrame TemporalChain::run(const GBuffer& g, GBuffer* release, const Camera& cam
                         (p_.reprojection == "auto" && !g.motion.empty() && frame == frame_ + 1);
     rep.reprojection = vector ? "vector" : "scatter";
     if (vector && f > 1) {
-      // Each texel's motion is its own pixel's, in texels.
-      std::vector<float> motion(2 * n_px);
-      const float inv_f = 1.f / float(f);
-      tbb::parallel_for(0, cv.height, [&](int j) {
-        for (int i = 0; i < cv.width; ++i) {
-          const size_t k = size_t(j) * cv.width + i, src = size_t(f * j) * v.width + f * i;
-          motion[2 * k] = g.motion[2 * src] * inv_f;
-          motion[2 * k + 1] = g.motion[2 * src + 1] * inv_f;
-        }
-      });
-      r = reproject_gather(view_, cam_, data_, channels, cv, cam, motion, tol);
+      r = reproject_gather(view_, cam_, data_, channels, cv, cam, reduce_motion(v, lo, f, g.motion),
+                           tol);
     } else {
       r = vector ? reproject_gather(view_, cam_, data_, channels, cv, cam, g.motion, tol)
                  : reproject_scatter(view_, cam_, data_, channels, cv, cam, tol);
@@ -212,16 +203,6 @@ AoFrame TemporalChain::run(const GBuffer& g, GBuffer* release, const Camera& cam
     in.reduced = &lo;
     in.plan = &plan;
   }
-  const bool fresnel = !g.f0.empty() || !g.metallic.empty();
-  // The diffuse weight (diffuse_weight) of each pixel on an upsampled irradiance: the texels
-  // hold the light that reaches them, and each pixel reflects its own share of it.
-  auto weight = [&](std::vector<Vec3>& e) {
-    if (!fresnel) return;
-    tbb::parallel_for(size_t(0), e.size(), [&](size_t i) {
-      const Vec3 w = diffuse_weight(g, i);
-      e[i] = Vec3{w.x * e[i].x, w.y * e[i].y, w.z * e[i].z};
-    });
-  };
   std::vector<Vec3>& feedback = in.feedback;
   if (history && gather && p_.feedback) {
     std::vector<float> e(3 * n_px), depth(n_px);
@@ -247,7 +228,8 @@ AoFrame TemporalChain::run(const GBuffer& g, GBuffer* release, const Camera& cam
       fb.height = cv.height;
       fb.irradiance = std::move(feedback);
       feedback = std::move(upsample_horizon(v, lo, plan, fb).irradiance);
-      weight(feedback);
+      // The texels hold the light that reaches them; each pixel reflects its own share of it.
+      weigh_diffuse(g, feedback);
     }
   }
 
@@ -340,7 +322,7 @@ AoFrame TemporalChain::run(const GBuffer& g, GBuffer* release, const Camera& cam
   });
   if (f > 1) {  // the blend, to the pixels
     h = upsample_horizon(v, lo, plan, h);
-    if (has_e) weight(h.irradiance);
+    if (has_e) weigh_diffuse(g, h.irradiance);
     if (!n_out.empty()) n_out = upsample_count(v, lo, plan, n_out);
   }
   if (cache && has_e) cache_.add(v, cam, g, h.irradiance, frame);
