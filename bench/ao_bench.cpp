@@ -74,7 +74,8 @@ void BM_Search(benchmark::State& state) {
   }
   const double pixels = double(f.g.width) * f.g.height;
   const int n = effective_search_scale(p, f.g.width, f.g.height);
-  const double searched = double((f.g.width + n - 1) / n) * double((f.g.height + n - 1) / n);
+  const double searched =
+      double(reduced_extent(f.g.width, n)) * double(reduced_extent(f.g.height, n));
   const int per_side = p.steps + (gather ? p.gather_steps : 0);
   state.counters["samples/s"] = benchmark::Counter(searched * p.slices * 2 * per_side,
                                                    benchmark::Counter::kIsIterationInvariantRate);

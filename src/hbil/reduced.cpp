@@ -29,8 +29,8 @@ std::string describe_search(const Params& p, int width, int height) {
 
 ViewGBuffer reduce_view(const ViewGBuffer& v, int f) {
   ViewGBuffer lo;
-  lo.width = (v.width + f - 1) / f;
-  lo.height = (v.height + f - 1) / f;
+  lo.width = reduced_extent(v.width, f);
+  lo.height = reduced_extent(v.height, f);
   lo.scale = v.scale * f;
   lo.position.resize(lo.pixels());
   lo.normal.resize(lo.pixels());

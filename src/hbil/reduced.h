@@ -39,7 +39,12 @@ int effective_search_scale(const Params& p, int width, int height);
 // block, upsampled (search_scale auto for 1920x1080)".
 std::string describe_search(const Params& p, int width, int height);
 
-// Every f-th pixel of every f-th row of v (f >= 1), with scale = v.scale * f.
+// The texels searched across n pixels with search_scale f: pixels 0, f, 2f, ... (f >= 1).
+constexpr int reduced_extent(int n, int f) {
+  return (n + f - 1) / f;
+}
+// Every f-th pixel of every f-th row of v (f >= 1), with scale = v.scale * f: a view of
+// reduced_extent(v.width, f) x reduced_extent(v.height, f) texels.
 ViewGBuffer reduce_view(const ViewGBuffer& v, int f);
 // The motion (GBuffer::motion, 2 floats a pixel of v) of each texel of lo = reduce_view(v, f):
 // its own pixel's, in texels (divided by f).

@@ -97,11 +97,13 @@ int seam_preroll(const Params& p, std::string* why) {
 }
 
 int run_memory_mb(int width, int height) {
-  // Peak RSS measured with the default outputs and a PNG: 161 MB at 256x144, 1081 MB at
-  // 1920x1080 (overlap on: three frames in flight), 1403 MB at 3840x2160 (overlap off).
+  // Peak RSS with the default outputs and a PNG (bench/speed.sh on room_poles, 2026-12-07):
+  // 155 MB at 256x144, 839 MB at 1920x1080 (overlap on: three frames in flight), 1098 MB at
+  // 3840x2160 (overlap off). farm slurm adds a quarter for other shots (more passes, a
+  // panorama).
   const double mpx = double(width) * double(height) / 1e6;
   const bool overlap = double(width) * double(height) <= double(1 << 22);
-  return int(std::ceil(144 + (overlap ? 452 : 152) * mpx));
+  return int(std::ceil(143 + (overlap ? 336 : 115) * mpx));
 }
 
 FarmPlan make_farm_plan(const FarmRequest& r, const Params& requested) {
@@ -127,7 +129,8 @@ FarmPlan make_farm_plan(const FarmRequest& r, const Params& requested) {
   // search_scale f), twice while it is reprojected.
   if (p.temporal && p.history_window > 0) {
     const int f = effective_search_scale(p, plan.width, plan.height);
-    const double texels = double((plan.width + f - 1) / f) * double((plan.height + f - 1) / f);
+    const double texels =
+        double(reduced_extent(plan.width, f)) * double(reduced_extent(plan.height, f));
     plan.memory_mb += int(std::ceil(2.0 * 12 * 4 * texels / 1e6));
   }
   if (r.preroll == "auto") {
