@@ -60,8 +60,9 @@ TEST(FarmPreroll, AFiniteWindowNeedsItsMemory) {
   EXPECT_EQ(pipeline::window_preroll(p, 47, 1), 0);
 }
 
-// From the peaks the README measures (155 MB at 256x144, 839 MB at 1920x1080 with overlap,
-// 1098 MB at 3840x2160 without), each within 2 %.
+// From the peaks bench/speed.sh measured on room_poles (155 MB at 256x144, 839 MB at
+// 1920x1080 with overlap, 1098 MB at 3840x2160 without; README "Speed" gives another run's
+// 831 and 1093 MB), each within 2 %.
 TEST(FarmMemory, FitsTheMeasuredPeaks) {
   EXPECT_NEAR(pipeline::run_memory_mb(256, 144), 155, 155 * 0.02);
   EXPECT_NEAR(pipeline::run_memory_mb(1920, 1080), 839, 839 * 0.02);
