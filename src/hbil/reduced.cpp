@@ -27,6 +27,20 @@ std::string describe_search(const Params& p, int width, int height) {
   return s;
 }
 
+namespace {
+
+// fn(k, own, i, j) for each texel (i, j) of lo = reduce_view(v, f), rows in parallel: k is its
+// index in lo, own the index in v of its own pixel (f i, f j).
+template <class Fn>
+void for_each_texel(const ViewGBuffer& v, const ViewGBuffer& lo, int f, Fn fn) {
+  tbb::parallel_for(0, lo.height, [&](int j) {
+    for (int i = 0; i < lo.width; ++i)
+      fn(size_t(j) * lo.width + i, size_t(f * j) * v.width + f * i, i, j);
+  });
+}
+
+}  // namespace
+
 ViewGBuffer reduce_view(const ViewGBuffer& v, int f) {
   ViewGBuffer lo;
   lo.width = reduced_extent(v.width, f);
@@ -35,13 +49,10 @@ ViewGBuffer reduce_view(const ViewGBuffer& v, int f) {
   lo.position.resize(lo.pixels());
   lo.normal.resize(lo.pixels());
   if (!v.thickness.empty()) lo.thickness.resize(lo.pixels());
-  tbb::parallel_for(0, lo.height, [&](int j) {
-    for (int i = 0; i < lo.width; ++i) {
-      const size_t k = size_t(j) * lo.width + i, src = size_t(f * j) * v.width + f * i;
-      lo.position[k] = v.position[src];
-      lo.normal[k] = v.normal[src];
-      if (!lo.thickness.empty()) lo.thickness[k] = v.thickness[src];
-    }
+  for_each_texel(v, lo, f, [&](size_t k, size_t src, int, int) {
+    lo.position[k] = v.position[src];
+    lo.normal[k] = v.normal[src];
+    if (!lo.thickness.empty()) lo.thickness[k] = v.thickness[src];
   });
   return lo;
 }
@@ -50,12 +61,9 @@ std::vector<float> reduce_motion(const ViewGBuffer& v, const ViewGBuffer& lo, in
                                  const std::vector<float>& motion) {
   std::vector<float> out(2 * lo.pixels());
   const float inv_f = 1.f / float(f);
-  tbb::parallel_for(0, lo.height, [&](int j) {
-    for (int i = 0; i < lo.width; ++i) {
-      const size_t k = size_t(j) * lo.width + i, src = size_t(f * j) * v.width + f * i;
-      out[2 * k] = motion[2 * src] * inv_f;
-      out[2 * k + 1] = motion[2 * src + 1] * inv_f;
-    }
+  for_each_texel(v, lo, f, [&](size_t k, size_t src, int, int) {
+    out[2 * k] = motion[2 * src] * inv_f;
+    out[2 * k + 1] = motion[2 * src + 1] * inv_f;
   });
   return out;
 }
@@ -63,16 +71,12 @@ std::vector<float> reduce_motion(const ViewGBuffer& v, const ViewGBuffer& lo, in
 std::vector<Vec3> reduce_radiance(const ViewGBuffer& v, const ViewGBuffer& lo, int f,
                                   const std::vector<Vec3>& L, float depth_tolerance) {
   std::vector<Vec3> out(lo.pixels());
-  tbb::parallel_for(0, lo.height, [&](int j) {
-    for (int i = 0; i < lo.width; ++i) {
-      const size_t k = size_t(j) * lo.width + i;
-      if (lo.is_background(k)) continue;
-      // The texel's f x f block; its own pixel (the block's first) where nothing passes.
-      const size_t own = size_t(f * j) * v.width + f * i;
-      out[k] = surface_mean(
-          v, f * i, f * j, f * i + f - 1, f * j + f - 1, lo.position[k], lo.normal[k],
-          depth_tolerance * lo.position[k].z, [&](size_t p) { return L[p]; }, L[own]);
-    }
+  for_each_texel(v, lo, f, [&](size_t k, size_t own, int i, int j) {
+    if (lo.is_background(k)) return;
+    // The texel's f x f block; its own pixel (the block's first) where nothing passes.
+    out[k] = surface_mean(
+        v, f * i, f * j, f * i + f - 1, f * j + f - 1, lo.position[k], lo.normal[k],
+        depth_tolerance * lo.position[k].z, [&](size_t p) { return L[p]; }, L[own]);
   });
   return out;
 }
