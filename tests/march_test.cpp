@@ -18,6 +18,7 @@
 #include "analytic_scenes.h"
 #include "hbil/ao_frame.h"
 #include "hbil/interleave.h"
+#include "hbil/march_common.h"
 #include "io/camera_io.h"
 #include "io/exr_frame.h"
 
@@ -223,6 +224,30 @@ TEST(MarchSimd, EveryInstructionSetGivesTheSameBits) {
 
 // A later bounce summed from the first one's recorded gather equals a new search with its
 // radiance, to the bit, with both marches.
+// The bitmask march's γ = atan2(n'x, n'y) is march::fast_atan2 (the vector march repeats it lane by
+// lane): against atan2 in double all around the circle, at lengths from 1e-30 to 1e30, within the
+// 4e-7 rad its comment states; on the axes and at the origin as stated.
+TEST(FastAtan2, WithinFourTenthsOfAMicroradianAllAroundTheCircle) {
+  constexpr double kPi = std::numbers::pi;
+  double worst = 0;
+  for (int k = 0; k < 100000; ++k) {
+    const double t = -kPi + 2 * kPi * (k + 0.5) / 100000;
+    for (double r : {1e-30, 1e-3, 1.0, 7.5, 1e30}) {
+      const float y = float(r * std::sin(t)), x = float(r * std::cos(t));
+      const double want = std::atan2(double(y), double(x));
+      worst = std::max(worst, std::abs(double(march::fast_atan2(y, x)) - want));
+    }
+  }
+  std::cout << "fast_atan2: largest error " << worst << " rad\n";
+  EXPECT_LT(worst, 4e-7);
+  EXPECT_EQ(march::fast_atan2(0.f, 0.f), 0.f);
+  EXPECT_EQ(march::fast_atan2(0.f, 2.f), 0.f);
+  EXPECT_NEAR(march::fast_atan2(2.f, 0.f), 0.5 * kPi, 1e-7);
+  EXPECT_NEAR(march::fast_atan2(-2.f, 0.f), -0.5 * kPi, 1e-7);
+  EXPECT_NEAR(march::fast_atan2(0.f, -2.f), kPi, 1e-7);
+  EXPECT_NEAR(march::fast_atan2(1.f, 1.f), 0.25 * kPi, 1e-7);
+}
+
 TEST(GatherRecord, ReplayEqualsANewSearch) {
   const Params p;
   const Sample sample = room_poles_frame3(p);

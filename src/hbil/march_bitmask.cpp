@@ -27,7 +27,7 @@ PixelSums march_bitmask_pixel(const SampleView& view, int i, int j, const Vec3& 
       if (log) log->counts.push_back(0);
       continue;
     }
-    const float gamma = std::atan2(L.nx, L.ny);  // angle of n' from ω_o
+    const float gamma = fast_atan2(L.nx, L.ny);  // angle of n' from ω_o
     // 32 sectors over [γ − π/2, γ + π/2]; sector k's cosine-weighted integral is
     // W[k] = G(b_k) − G(a_k), so AO keeps the definition of eq. 9.
     const float sector0 = gamma - 0.5f * kPi;
@@ -151,12 +151,23 @@ PixelSums march_bitmask_pixel(const SampleView& view, int i, int j, const Vec3& 
       irradiance += view.fill_at(c, i, j) * w;
       if (log) log->entries.push_back({GatherEntry::kFillSource, 1.f, w});
     }
-    for (int k = 0; k < kSectors; ++k) {
-      if (occluded >> k & 1u) continue;
-      acc.ao += bound[k + 1].ao - bound[k].ao;
-      acc.vis += bound[k + 1].vis - bound[k].vis;
-      acc.bent += L.D * (bound[k + 1].bx - bound[k].bx) + f.wo * (bound[k + 1].by - bound[k].by);
+    // The open sectors' sums: sector k spans boundaries k and k + 1, so Σ over the open k of
+    // G(k + 1) − G(k) is Σ over the boundaries of (open(k − 1) − open(k)) G(k), with
+    // open(−1) = open(32) = 0: each boundary once, in order (the vector march need not
+    // keep a table of them for this).
+    float s_ao = 0.f, s_vis = 0.f, s_bx = 0.f, s_by = 0.f;
+    for (int k = 0; k <= kSectors; ++k) {
+      const float before = k > 0 && !(occluded >> (k - 1) & 1u) ? 1.f : 0.f;
+      const float after = k < kSectors && !(occluded >> k & 1u) ? 1.f : 0.f;
+      const float coef = before - after;
+      s_ao += coef * bound[k].ao;
+      s_vis += coef * bound[k].vis;
+      s_bx += coef * bound[k].bx;
+      s_by += coef * bound[k].by;
     }
+    acc.ao += s_ao;
+    acc.vis += s_vis;
+    acc.bent += L.D * s_bx + f.wo * s_by;
     acc.irradiance += irradiance;
     if (log) log->counts.push_back(std::uint16_t(log->entries.size() - logged));
   }

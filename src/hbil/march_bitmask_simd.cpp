@@ -4,15 +4,15 @@
 //
 // Every lane does exactly the scalar reference's arithmetic, in the same order and without
 // fused multiply-adds, so the results are the scalar ones to the bit
-// (tests/march_test.cpp); only the per-slice angle γ = atan2(n'x, n'y) is taken from the
-// scalar libm, lane by lane. What changes is the control flow:
+// (tests/march_test.cpp). What changes is the control flow:
 //  - a lane's `continue` becomes a mask for that sample, its `break` (the screen edge) a
 //    mask for the rest of the side;
 //  - the sample's fields are gathered by index (position, normal, thickness, radiance);
 //  - the sectors a sample newly covers are summed lowest first, one masked add per sector
 //    that is new in any lane (each sector is new at most once per slice);
-//  - the antiderivatives at the 33 boundaries, and the 32 sector weights, are per-lane
-//    tables in stack buffers;
+//  - with the gather, the AO antiderivative at the 33 boundaries and the 32 sector weights
+//    are per-lane tables in stack buffers; the open sectors' sums take the boundaries again,
+//    one at a time, after the steps;
 //  - with a GatherLog, each lane's lit samples are kept per lane and appended pixel by pixel
 //    after the vector, in the scalar march's order.
 // Lanes of background pixels and past the run's end are masked off from the start.
@@ -61,13 +61,9 @@ void MarchBitmaskRow(const SampleView& view, int i0, int j, int count, const flo
   const bool has_fill = gather && view.fills(c);
   const V3 fill_c{hn::Set(d, c.fill.x), hn::Set(d, c.fill.y), hn::Set(d, c.fill.z)};
 
-  // Per-lane scratch: the boundary antiderivatives (33 per lane) and the slice angles.
+  // Per-lane scratch for the gather: the boundaries' AO antiderivative (33 per lane).
   HWY_ALIGN float b_ao[(kSectors + 1) * kMaxLanes];
-  HWY_ALIGN float b_vis[(kSectors + 1) * kMaxLanes];
-  HWY_ALIGN float b_bx[(kSectors + 1) * kMaxLanes];
-  HWY_ALIGN float b_by[(kSectors + 1) * kMaxLanes];
   HWY_ALIGN float w_ao[kSectors * kMaxLanes];  // each sector's AO weight, b_ao[k + 1] − b_ao[k]
-  HWY_ALIGN float lane_x[kMaxLanes], lane_y[kMaxLanes];
 
   if (!view.radiance) log = nullptr;
   // The gather log, lane by lane until the lanes' pixels are appended in order: lane l's
@@ -120,30 +116,33 @@ void MarchBitmaskRow(const SampleView& view, int i0, int j, int count, const flo
       }
       const V3& D = L.D;
       const VF &dx = L.dx, &dy = L.dy, &nx = L.nx, &ny = L.ny;
-      // γ and the boundary table (march_bitmask.cpp), lane by lane for γ.
-      hn::Store(nx, d, lane_x);
-      hn::Store(ny, d, lane_y);
-      for (size_t l = 0; l < N; ++l) lane_x[l] = std::atan2(lane_x[l], lane_y[l]);
-      const VF sector0 = hn::Sub(hn::Load(d, lane_x), hn::Set(d, 0.5f * kPi));
+      // γ and the boundaries' antiderivatives (march_bitmask.cpp).
+      const VF sector0 = hn::Sub(FastAtan2(d, nx, ny), hn::Set(d, 0.5f * kPi));
       const VF nl = hn::Sqrt(hn::Add(hn::Mul(nx, nx), hn::Mul(ny, ny)));
       const MF has_n = hn::Gt(nl, zero);
-      VF sb = hn::IfThenElse(has_n, hn::Div(hn::Neg(ny), nl), hn::Set(d, -1.f));
-      VF cb = hn::IfThenElse(has_n, hn::Div(nx, nl), zero);
-      const VF vcd = hn::Set(d, cd), vsd = hn::Set(d, sd);
-      for (int k = 0; k <= kSectors; ++k) {
-        const VF t = hn::Add(sector0, hn::Set(d, float(k) * kSectorWidth));
-        const Antiderivative g = AntiderivativeAt(d, t, sb, cb, nx, ny);
-        hn::Store(g.ao, d, b_ao + k * N);
-        hn::Store(g.vis, d, b_vis + k * N);
-        hn::Store(g.bx, d, b_bx + k * N);
-        hn::Store(g.by, d, b_by + k * N);
-        const VF sn = hn::Add(hn::Mul(sb, vcd), hn::Mul(cb, vsd));
-        cb = hn::Sub(hn::Mul(cb, vcd), hn::Mul(sb, vsd));
-        sb = sn;
+      const VF sb0 = hn::IfThenElse(has_n, hn::Div(hn::Neg(ny), nl), hn::Set(d, -1.f));
+      const VF cb0 = hn::IfThenElse(has_n, hn::Div(nx, nl), zero);
+      // fn(k, G(boundary k)) for k = 0 … kSectors, in order.
+      auto for_each_boundary = [&](auto fn) {
+        const VF vcd = hn::Set(d, cd), vsd = hn::Set(d, sd);
+        VF sb = sb0, cb = cb0;
+        for (int k = 0; k <= kSectors; ++k) {
+          const VF t = hn::Add(sector0, hn::Set(d, float(k) * kSectorWidth));
+          fn(k, AntiderivativeAt(d, t, sb, cb, nx, ny));
+          const VF sn = hn::Add(hn::Mul(sb, vcd), hn::Mul(cb, vsd));
+          cb = hn::Sub(hn::Mul(cb, vcd), hn::Mul(sb, vsd));
+          sb = sn;
+        }
+      };
+      // The gather's sector weights (fresh sectors, fill) need every boundary's ao before
+      // the steps; the march's own sums take the boundaries after them.
+      if (gather) {
+        for_each_boundary(
+            [&](int k, const Antiderivative& g) { hn::Store(g.ao, d, b_ao + k * N); });
+        for (int k = 0; k < kSectors; ++k)
+          hn::Store(hn::Sub(hn::Load(d, b_ao + (k + 1) * N), hn::Load(d, b_ao + k * N)), d,
+                    w_ao + k * N);
       }
-      for (int k = 0; k < kSectors; ++k)
-        hn::Store(hn::Sub(hn::Load(d, b_ao + (k + 1) * N), hn::Load(d, b_ao + k * N)), d,
-                  w_ao + k * N);
       VU occluded = hn::Zero(du), occluded_g = hn::Zero(du);
       V3 irradiance{zero, zero, zero};
       for (int side = 0; side < 2; ++side) {
@@ -156,10 +155,13 @@ void MarchBitmaskRow(const SampleView& view, int i0, int j, int count, const flo
           const VF cv = Dot(dd, wo);
           return hn::Div(hn::Mul(cv, hn::Abs(cv)), Dot(dd, dd));
         };
+        // sign · fast_acos(std::clamp(±√|q|, −1, 1)), taken on the magnitude: the clamp is
+        // min(√|q|, 1), and the cosine is negative exactly where q is (the root of a positive
+        // float is positive). A key is never NaN (the sample's own has |X − P|² > 0, and a
+        // NaN key never wins a comparison), so the result is the scalar's to the bit.
         auto angle_of_key = [&](VF q) {
-          const VF r = hn::Sqrt(hn::Abs(q));
-          const VF cv = hn::IfThenElse(hn::Lt(q, zero), hn::Neg(r), r);
-          return hn::Mul(sign, FastAcos(d, Clamp(cv, hn::Set(d, -1.f), one)));
+          const VF r = AcosOfMagnitude(d, hn::Min(hn::Sqrt(hn::Abs(q)), one));
+          return hn::Mul(sign, hn::IfThenElse(hn::Lt(q, zero), hn::Sub(hn::Set(d, kPi), r), r));
         };
         auto ray_at = [&](VF o) {  // f.ray_P + L.dv * (sign * o) * float(view.stride)
           return RayAt(ray_P, L.dv, hn::Mul(sign, o), stride);
@@ -201,9 +203,9 @@ void MarchBitmaskRow(const SampleView& view, int i0, int j, int count, const flo
             const VF plane = Dot(S, n_s);
             for (const VF& oo : {lo_o, hi_o}) {
               const V3 r = ray_at(oo);
-              const VF den = Dot(r, n_s);
-              MF ok = hn::And(measured, hn::Gt(hn::Mul(den, den), hn::Mul(grazing2, Dot(r, r))));
-              const V3 X = Scale(r, hn::Div(plane, den));
+              const VF den = DotRay(r, n_s);
+              MF ok = hn::And(measured, hn::Gt(hn::Mul(den, den), hn::Mul(grazing2, DotRay(r, r))));
+              const V3 X = ScaleRay(r, hn::Div(plane, den));
               ok = hn::And(ok, hn::Gt(X.z, zero));
               if (hn::AllFalse(d, ok)) continue;
               cover(key(X), ok);
@@ -278,19 +280,24 @@ void MarchBitmaskRow(const SampleView& view, int i0, int j, int count, const flo
           log_lanes(src_lane, fw_lane, w_lane, live);
         }
       }
-      // The unoccluded sectors, in order (march_bitmask.cpp).
-      for (int k = 0; k < kSectors; ++k) {
-        const MF open = hn::And(
-            live, hn::RebindMask(d, hn::Eq(hn::And(occluded, hn::Set(du, 1u << k)), hn::Zero(du))));
-        if (hn::AllFalse(d, open)) continue;
-        auto diff = [&](const float* tab) {
-          return hn::Sub(hn::Load(d, tab + (k + 1) * N), hn::Load(d, tab + k * N));
-        };
-        const VF dbx = diff(b_bx), dby = diff(b_by);
-        acc_ao = hn::IfThenElse(open, hn::Add(acc_ao, diff(b_ao)), acc_ao);
-        acc_vis = hn::IfThenElse(open, hn::Add(acc_vis, diff(b_vis)), acc_vis);
-        acc_b = Select(open, Add3(acc_b, Add3(Scale(D, dbx), Scale(wo, dby))), acc_b);
-      }
+      // The open sectors' sums, boundary by boundary (march_bitmask.cpp).
+      VF s_ao = zero, s_vis = zero, s_bx = zero, s_by = zero;
+      MF before = none;  // sector k − 1 is open
+      for_each_boundary([&](int k, const Antiderivative& g) {
+        const MF after =
+            k < kSectors ? hn::RebindMask(d, hn::Eq(hn::And(occluded, hn::Set(du, 1u << (k & 31))),
+                                                    hn::Zero(du)))
+                         : none;
+        const VF coef = hn::Sub(hn::IfThenElseZero(before, one), hn::IfThenElseZero(after, one));
+        s_ao = hn::Add(s_ao, hn::Mul(coef, g.ao));
+        s_vis = hn::Add(s_vis, hn::Mul(coef, g.vis));
+        s_bx = hn::Add(s_bx, hn::Mul(coef, g.bx));
+        s_by = hn::Add(s_by, hn::Mul(coef, g.by));
+        before = after;
+      });
+      acc_ao = hn::IfThenElse(live, hn::Add(acc_ao, s_ao), acc_ao);
+      acc_vis = hn::IfThenElse(live, hn::Add(acc_vis, s_vis), acc_vis);
+      acc_b = Select(live, Add3(acc_b, Add3(Scale(D, s_bx), Scale(wo, s_by))), acc_b);
       acc_e = Select(live, Add3(acc_e, irradiance), acc_e);
       if (log) end_slice(s);
     }

@@ -36,6 +36,29 @@ inline float fast_acos(float x) {
   return x < 0.f ? kPi - r : r;
 }
 
+// atan2(y, x) to 4e-7 rad (floats near π are 2.4e-7 apart; libm's atan2f is within one of
+// them), in a form that vectorises: march_simd-inl.h repeats it lane by lane. Every angle of
+// the bitmask method is quantised to sectors of 0.098 rad. atan(a) for a = min / max of
+// |x|, |y| in [0, 1] is a P(a²), P of degree 7 fitted to the relative error (1.1e-7 rad at
+// most), then unfolded to the octant. atan2(0, 0) is 0.
+inline float fast_atan2(float y, float x) {
+  const float ax = std::fabs(x), ay = std::fabs(y);
+  const float hi = std::max(ax, ay), lo = std::min(ax, ay);
+  const float a = hi > 0.f ? lo / hi : 0.f, s = a * a;
+  float p = -0.0040553999f;
+  p = p * s + 0.021865912f;
+  p = p * s + -0.055916518f;
+  p = p * s + 0.096425004f;
+  p = p * s + -0.13908748f;
+  p = p * s + 0.19946590f;
+  p = p * s + -0.33329862f;
+  p = p * s + 0.99999934f;
+  float r = a * p;
+  if (ay > ax) r = 0.5f * kPi - r;
+  if (x < 0.f) r = kPi - r;
+  return y < 0.f ? -r : r;
+}
+
 // The bitmask's sectors over the slice's visible half circle.
 constexpr int kSectors = 32;
 constexpr float kSectorWidth = kPi / kSectors;
@@ -65,7 +88,7 @@ inline float facing_weight(float n_dot_wi) {
 // of the plane orthogonal to ω_o in which the slice directions turn.
 struct PixelFrame {
   Vec3 wo;           // towards the camera at the view-space origin
-  Vec3 ray_P;        // P's ray, scaled to z = 1
+  Vec3 ray_P;        // P's ray, scaled to z = 1 (exactly 1)
   float r_tex = 0;   // AO radius, texels
   float rg_tex = 0;  // gather radius, texels (= r_tex without gather-only samples)
   Vec3 e1, e2;       // slice s has D = cos φ e1 + sin φ e2
@@ -74,7 +97,7 @@ inline PixelFrame pixel_frame(const SampleView& view, const Vec3& P, const Horiz
                               bool far) {
   PixelFrame f;
   f.wo = normalize_or_zero(-P);
-  f.ray_P = P / P.z;
+  f.ray_P = Vec3{P.x / P.z, P.y / P.z, 1.f};  // z = 1 exactly (the marches' rays keep it)
   // Screen-space search radius in texels: the world radius at this depth (HBAO, XeGTAO),
   // never beyond the image (a larger radius would only step off screen).
   const float focal = 0.5f * (c.fx + c.fy);

@@ -58,14 +58,36 @@ HWY_INLINE VF Clamp(VF v, VF lo, VF hi) {
   // std::clamp(v, lo, hi) = v < lo ? lo : (hi < v ? hi : v)
   return hn::IfThenElse(hn::Lt(v, lo), lo, hn::IfThenElse(hn::Lt(hi, v), hi, v));
 }
-// march::fast_acos, lane by lane.
-HWY_INLINE VF FastAcos(DF d, VF x) {
-  const VF a = hn::Abs(x);
+// march::fast_acos at |x| = a, before its reflection for x < 0.
+HWY_INLINE VF AcosOfMagnitude(DF d, VF a) {
   VF p = hn::Sub(hn::Set(d, 0.0742610f), hn::Mul(hn::Set(d, 0.0187293f), a));
   p = hn::Add(hn::Set(d, -0.2121144f), hn::Mul(a, p));
   p = hn::Add(hn::Set(d, 1.5707288f), hn::Mul(a, p));
-  const VF r = hn::Mul(hn::Sqrt(hn::Sub(hn::Set(d, 1.f), a)), p);
+  return hn::Mul(hn::Sqrt(hn::Sub(hn::Set(d, 1.f), a)), p);
+}
+// march::fast_acos, lane by lane.
+HWY_INLINE VF FastAcos(DF d, VF x) {
+  const VF r = AcosOfMagnitude(d, hn::Abs(x));
   return hn::IfThenElse(hn::Lt(x, hn::Zero(d)), hn::Sub(hn::Set(d, march::kPi), r), r);
+}
+// march::fast_atan2, lane by lane.
+HWY_INLINE VF FastAtan2(DF d, VF y, VF x) {
+  const VF zero = hn::Zero(d);
+  const VF ax = hn::Abs(x), ay = hn::Abs(y);
+  const VF hi = hn::Max(ax, ay), lo = hn::Min(ax, ay);
+  const VF a = hn::IfThenElseZero(hn::Gt(hi, zero), hn::Div(lo, hi)), s = hn::Mul(a, a);
+  VF p = hn::Set(d, -0.0040553999f);
+  p = hn::Add(hn::Mul(p, s), hn::Set(d, 0.021865912f));
+  p = hn::Add(hn::Mul(p, s), hn::Set(d, -0.055916518f));
+  p = hn::Add(hn::Mul(p, s), hn::Set(d, 0.096425004f));
+  p = hn::Add(hn::Mul(p, s), hn::Set(d, -0.13908748f));
+  p = hn::Add(hn::Mul(p, s), hn::Set(d, 0.19946590f));
+  p = hn::Add(hn::Mul(p, s), hn::Set(d, -0.33329862f));
+  p = hn::Add(hn::Mul(p, s), hn::Set(d, 0.99999934f));
+  VF r = hn::Mul(a, p);
+  r = hn::IfThenElse(hn::Gt(ay, ax), hn::Sub(hn::Set(d, 0.5f * march::kPi), r), r);
+  r = hn::IfThenElse(hn::Lt(x, zero), hn::Sub(hn::Set(d, march::kPi), r), r);
+  return hn::IfThenElse(hn::Lt(y, zero), hn::Neg(r), r);
 }
 // normalize_or_zero (vecmath.h).
 HWY_INLINE V3 NormalizeOrZero(DF d, const V3& a) {
@@ -101,7 +123,14 @@ HWY_INLINE VF FacingWeight(DF d, VF n_dot_d3, VF dist) {
 
 // The ray f.ray_P + L.dv * (sign * o) * stride of march_common.h, with sign_o = sign * o.
 // L.dv.z is 0, so its z term adds a zero to ray_P.z (o and the stride are finite), which
-// is therefore the result to the bit, and is not computed.
+// is therefore the result to the bit, and is not computed: a ray's z is 1. DotRay and
+// ScaleRay are Dot and Scale for such a ray, without the product by its z (1 · v = v).
+HWY_INLINE VF DotRay(const V3& ray, const V3& v) {
+  return hn::Add(hn::Add(hn::Mul(ray.x, v.x), hn::Mul(ray.y, v.y)), v.z);
+}
+HWY_INLINE V3 ScaleRay(const V3& ray, VF s) {
+  return {hn::Mul(ray.x, s), hn::Mul(ray.y, s), s};
+}
 HWY_INLINE V3 RayAt(const V3& ray_P, const V3& dv, VF sign_o, VF stride) {
   return {hn::Add(ray_P.x, hn::Mul(hn::Mul(dv.x, sign_o), stride)),
           hn::Add(ray_P.y, hn::Mul(hn::Mul(dv.y, sign_o), stride)), ray_P.z};
@@ -145,7 +174,7 @@ HWY_INLINE PixelLanes LoadPixels(DF d, const SampleView& view, int i0, int j, in
   px.valid = hn::And(in_run, hn::Lt(px.P.z, hn::Set(d, ViewGBuffer::kBackground)));
   const V3& P = px.P;
   px.wo = NormalizeOrZero(d, {hn::Neg(P.x), hn::Neg(P.y), hn::Neg(P.z)});
-  px.ray_P = {hn::Div(P.x, P.z), hn::Div(P.y, P.z), hn::Div(P.z, P.z)};
+  px.ray_P = {hn::Div(P.x, P.z), hn::Div(P.y, P.z), one};
   const VF pz_stride = hn::Mul(P.z, hn::Set(d, float(view.stride)));
   px.r_tex = hn::Min(hn::Div(hn::Set(d, c.radius * focal), pz_stride), hn::Set(d, diagonal));
   px.rg_tex = px.far ? hn::Min(hn::Div(hn::Set(d, c.gather_radius * focal), pz_stride),
@@ -232,17 +261,17 @@ HWY_INLINE StepLanes TakeStep(DF d, const SampleView& view, int j, int k, VF sx,
   st.n_s = Gather3(d, view.normal, st.k3);
   // f.ray_P + L.dv * (sign * o) * float(view.stride)
   const V3 ray = RayAt(px.ray_P, L.dv, hn::Mul(sign, st.o), hn::Set(d, float(view.stride)));
-  const VF denom = Dot(ray, st.n_s);
+  const VF denom = DotRay(ray, st.n_s);
   const MF steep =
-      hn::Gt(hn::Mul(denom, denom), hn::Mul(hn::Set(d, march::kGrazing2), Dot(ray, ray)));
+      hn::Gt(hn::Mul(denom, denom), hn::Mul(hn::Set(d, march::kGrazing2), DotRay(ray, ray)));
   if (view.plane) {
     // dot(S, n_s) from the view's table; S itself only where the move does not apply.
-    st.S = Scale(ray, hn::Div(hn::GatherIndex(d, view.plane, st.k_s), denom));
+    st.S = ScaleRay(ray, hn::Div(hn::GatherIndex(d, view.plane, st.k_s), denom));
     if (!hn::AllFalse(d, hn::AndNot(steep, m)))
       st.S = Select(steep, st.S, Gather3(d, view.position, st.k3));
   } else {
     const V3 S = Gather3(d, view.position, st.k3);
-    st.S = Select(steep, Scale(ray, hn::Div(Dot(S, st.n_s), denom)), S);
+    st.S = Select(steep, ScaleRay(ray, hn::Div(Dot(S, st.n_s), denom)), S);
   }
   st.d3 = Sub3(st.S, px.P);
   st.dist2 = Dot(st.d3, st.d3);
