@@ -35,11 +35,15 @@ namespace {
 
 using namespace simd;
 
-// int(std::floor(v + 0.5f)) clamped to [0, kSectors].
+// int(std::floor(v + 0.5f)) clamped to [0, kSectors]. The clamped value is a whole number
+// from 0 to 32 (a NaN becomes 0), so c + 2²³ is exact and its bits are those of 2²³ plus c:
+// the integer without ConvertTo's fix-up of out-of-range values (four more instructions).
 HWY_INLINE VI SectorIndex(DF d, VF v) {
+  const DI di;
   const VF f = hn::Floor(hn::Add(v, hn::Set(d, 0.5f)));
   const VF c = hn::Min(hn::Max(f, hn::Zero(d)), hn::Set(d, float(march::kSectors)));
-  return hn::ConvertTo(DI(), c);
+  constexpr float kTwo23 = 8388608.f;  // 0x4B000000
+  return hn::Sub(hn::BitCast(di, hn::Add(c, hn::Set(d, kTwo23))), hn::Set(di, 0x4B000000));
 }
 
 }  // namespace

@@ -254,9 +254,10 @@ HWY_INLINE StepLanes TakeStep(DF d, const SampleView& view, int j, int k, VF sx,
   m = hn::AndNot(off, m);
   st.m = m;
   if (hn::AllFalse(d, m)) return st;
-  st.k_s = hn::IfThenElseZero(
-      hn::RebindMask(di, m),
-      hn::Add(hn::Mul(sj, hn::Set(di, int(view.row))), hn::Mul(si, hn::Set(di, int(view.col)))));
+  // (The deinterleaved copies have col = 1: no product for it.)
+  const VI col_term = view.col == 1 ? si : hn::Mul(si, hn::Set(di, int(view.col)));
+  st.k_s = hn::IfThenElseZero(hn::RebindMask(di, m),
+                              hn::Add(hn::Mul(sj, hn::Set(di, int(view.row))), col_term));
   st.k3 = hn::Mul(st.k_s, hn::Set(di, 3));
   st.n_s = Gather3(d, view.normal, st.k3);
   // f.ray_P + L.dv * (sign * o) * float(view.stride)
