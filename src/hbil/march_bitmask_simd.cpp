@@ -270,8 +270,7 @@ void MarchBitmaskRow(const SampleView& view, int i0, int j, int count, const flo
         for (int k = 0; k < kSectors; ++k) {
           const MF open_g =
               hn::RebindMask(d, hn::Eq(hn::And(occluded_g, hn::Set(du, 1u << k)), hn::Zero(du)));
-          const VF dw = hn::Sub(hn::Load(d, b_ao + (k + 1) * N), hn::Load(d, b_ao + k * N));
-          w = hn::IfThenElse(open_g, hn::Add(w, dw), w);
+          w = hn::IfThenElse(open_g, hn::Add(w, hn::Load(d, w_ao + k * N)), w);
         }
         const V3 fill = view.fill ? Gather3(d, view.fill, px.own3) : fill_c;
         irradiance = Add3(irradiance, Scale(fill, w));

@@ -41,18 +41,15 @@ inline float fast_acos(float x) {
 // the bitmask method is quantised to sectors of 0.098 rad. atan(a) for a = min / max of
 // |x|, |y| in [0, 1] is a P(a²), P of degree 7 fitted to the relative error (1.1e-7 rad at
 // most), then unfolded to the octant. atan2(0, 0) is 0.
+// P's coefficients, highest degree first (Horner's order).
+constexpr float kAtanPoly[8] = {-0.0040553999f, 0.021865912f, -0.055916518f, 0.096425004f,
+                                -0.13908748f,   0.19946590f,  -0.33329862f,  0.99999934f};
 inline float fast_atan2(float y, float x) {
   const float ax = std::fabs(x), ay = std::fabs(y);
   const float hi = std::max(ax, ay), lo = std::min(ax, ay);
   const float a = hi > 0.f ? lo / hi : 0.f, s = a * a;
-  float p = -0.0040553999f;
-  p = p * s + 0.021865912f;
-  p = p * s + -0.055916518f;
-  p = p * s + 0.096425004f;
-  p = p * s + -0.13908748f;
-  p = p * s + 0.19946590f;
-  p = p * s + -0.33329862f;
-  p = p * s + 0.99999934f;
+  float p = kAtanPoly[0];
+  for (int k = 1; k < 8; ++k) p = p * s + kAtanPoly[k];
   float r = a * p;
   if (ay > ax) r = 0.5f * kPi - r;
   if (x < 0.f) r = kPi - r;

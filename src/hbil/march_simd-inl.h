@@ -76,14 +76,8 @@ HWY_INLINE VF FastAtan2(DF d, VF y, VF x) {
   const VF ax = hn::Abs(x), ay = hn::Abs(y);
   const VF hi = hn::Max(ax, ay), lo = hn::Min(ax, ay);
   const VF a = hn::IfThenElseZero(hn::Gt(hi, zero), hn::Div(lo, hi)), s = hn::Mul(a, a);
-  VF p = hn::Set(d, -0.0040553999f);
-  p = hn::Add(hn::Mul(p, s), hn::Set(d, 0.021865912f));
-  p = hn::Add(hn::Mul(p, s), hn::Set(d, -0.055916518f));
-  p = hn::Add(hn::Mul(p, s), hn::Set(d, 0.096425004f));
-  p = hn::Add(hn::Mul(p, s), hn::Set(d, -0.13908748f));
-  p = hn::Add(hn::Mul(p, s), hn::Set(d, 0.19946590f));
-  p = hn::Add(hn::Mul(p, s), hn::Set(d, -0.33329862f));
-  p = hn::Add(hn::Mul(p, s), hn::Set(d, 0.99999934f));
+  VF p = hn::Set(d, march::kAtanPoly[0]);
+  for (int k = 1; k < 8; ++k) p = hn::Add(hn::Mul(p, s), hn::Set(d, march::kAtanPoly[k]));
   VF r = hn::Mul(a, p);
   r = hn::IfThenElse(hn::Gt(ay, ax), hn::Sub(hn::Set(d, 0.5f * march::kPi), r), r);
   r = hn::IfThenElse(hn::Lt(x, zero), hn::Sub(hn::Set(d, march::kPi), r), r);
