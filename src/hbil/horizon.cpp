@@ -46,11 +46,17 @@ std::vector<float> step_fractions(const HorizonConfig& c, float jitter) {
   return f;
 }
 
-std::vector<float> texel_planes(const Vec3* position, const Vec3* normal, size_t count) {
+std::vector<float> texel_surfaces(const Vec3* position, const Vec3* normal, size_t count) {
   // The marches' dot(S, n_s) to the bit: this file is compiled without fused multiply-adds.
-  std::vector<float> plane(count);
-  for (size_t k = 0; k < count; ++k) plane[k] = dot(position[k], normal[k]);
-  return plane;
+  std::vector<float> surface(4 * count);
+  for (size_t k = 0; k < count; ++k) {
+    float* r = surface.data() + 4 * k;
+    r[0] = normal[k].x;
+    r[1] = normal[k].y;
+    r[2] = normal[k].z;
+    r[3] = dot(position[k], normal[k]);
+  }
+  return surface;
 }
 
 SliceTerms integrate_slice(float theta0, float theta1, float nx, float ny) {

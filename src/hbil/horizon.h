@@ -104,11 +104,12 @@ struct SampleView {
   const float* thickness = nullptr;
   // HorizonConfig::fill per texel (from its fill_map), or null: HorizonConfig::fill.
   const Vec3* fill = nullptr;
-  // dot(position, normal) per texel, indexed like them (texel_planes), or null. The SIMD
-  // marches move a sample onto the slice's ray along its tangent plane (march_common.h's
-  // take_step) with it, so that they gather a texel's position only where that move does not
+  // Per texel, indexed like them, 4 floats: the normal and dot(position, normal)
+  // (texel_surfaces), or null. The SIMD marches load each sample's four with two 8-byte
+  // gathers, and move a sample onto the slice's ray along its tangent plane (march_common.h's
+  // take_step) with them, so that they gather a texel's position only where that move does not
   // apply (a grazing ray): the same bits, fewer loads.
-  const float* plane = nullptr;
+  const float* surface = nullptr;
   std::ptrdiff_t index(int i, int j) const { return j * row + i * col; }
   // Whether a gathering march lights its empty directions, and with what at texel (i, j).
   bool fills(const HorizonConfig& c) const { return radiance && (fill || c.has_fill()); }
@@ -117,8 +118,8 @@ struct SampleView {
   }
 };
 
-// SampleView::plane of `count` contiguous texels: dot(position[k], normal[k]).
-std::vector<float> texel_planes(const Vec3* position, const Vec3* normal, size_t count);
+// SampleView::surface of `count` contiguous texels: normal[k] and dot(position[k], normal[k]).
+std::vector<float> texel_surfaces(const Vec3* position, const Vec3* normal, size_t count);
 
 // Sums over the slices of one pixel (means are taken by the caller).
 struct PixelSums {

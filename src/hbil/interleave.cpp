@@ -57,8 +57,8 @@ HorizonImage horizon_full(const ViewGBuffer& g, const HorizonConfig& c, int slic
   std::vector<float> phi(slices);
   for (int s = 0; s < slices; ++s) phi[s] = kPi * (float(s) + 0.5f) / float(slices) + c.rotation;
   const std::vector<float> fraction = step_fractions(c, shifted(0.5f, c.jitter_shift));
-  const std::vector<float> plane =
-      c.vectorised ? texel_planes(g.position.data(), g.normal.data(), g.pixels())
+  const std::vector<float> surface =
+      c.vectorised ? texel_surfaces(g.position.data(), g.normal.data(), g.pixels())
                    : std::vector<float>{};
   SampleView view{g.position.data(),
                   g.normal.data(),
@@ -70,7 +70,7 @@ HorizonImage horizon_full(const ViewGBuffer& g, const HorizonConfig& c, int slic
                   radiance ? radiance->data() : nullptr,
                   g.thickness.empty() ? nullptr : g.thickness.data(),
                   c.fill_map};
-  if (!plane.empty()) view.plane = plane.data();
+  if (!surface.empty()) view.surface = surface.data();
   tbb::parallel_for(0, g.height, [&](int y) {
     if (c.vectorised) {
       std::vector<PixelSums> row(g.width);
@@ -110,7 +110,7 @@ HorizonImage horizon_interleaved(const ViewGBuffer& g, const HorizonConfig& c, i
   struct Sub {
     int ox, oy, w, h;
     std::vector<Vec3> pos, nrm, rad, fill;  // contiguous copies (empty when reading in place)
-    std::vector<float> thick, plane;
+    std::vector<float> thick, surface;
     SampleView view;
     std::vector<float> phi;
     std::vector<float> fraction;  // step positions, with this phase's jitter
@@ -157,8 +157,8 @@ HorizonImage horizon_interleaved(const ViewGBuffer& g, const HorizonConfig& c, i
                           s.thick.empty() ? nullptr : s.thick.data(),
                           s.fill.empty() ? nullptr : s.fill.data()};
       if (c.vectorised) {
-        s.plane = texel_planes(s.pos.data(), s.nrm.data(), s.pos.size());
-        s.view.plane = s.plane.data();
+        s.surface = texel_surfaces(s.pos.data(), s.nrm.data(), s.pos.size());
+        s.view.surface = s.surface.data();
       }
     } else {
       const size_t first = size_t(s.oy) * g.width + s.ox;

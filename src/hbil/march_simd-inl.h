@@ -16,6 +16,7 @@
 #include <hwy/highway.h>
 
 #include <cmath>
+#include <cstdint>
 
 #include "hbil/gbuffer.h"
 #include "hbil/march.h"
@@ -95,6 +96,32 @@ HWY_INLINE V3 Gather3(DF d, const Vec3* base, VI idx3) {
   const VI one = hn::Set(DI(), 1);
   return {hn::GatherIndex(d, b, idx3), hn::GatherIndex(d, b + 0, hn::Add(idx3, one)),
           hn::GatherIndex(d, b, hn::Add(idx3, hn::Add(one, one)))};
+}
+// Each lane's texel k of a SampleView::surface table (4 floats a texel): the normal n and
+// the plane's dot(position, n). Two gathers of 8-byte pairs, (x, y) and (z, plane), for each
+// half of the lanes, split into lanes by their even and odd floats: half the elements a
+// gather of each float would load.
+HWY_INLINE void GatherSurface(DF d, const float* surface, VI k, V3& n, VF& plane) {
+#if HWY_TARGET == HWY_SCALAR
+  const VI k4 = hn::Mul(k, hn::Set(DI(), 4));
+  n = {hn::GatherIndex(d, surface, k4), hn::GatherIndex(d, surface + 1, k4),
+       hn::GatherIndex(d, surface + 2, k4)};
+  plane = hn::GatherIndex(d, surface + 3, k4);
+#else
+  const hn::Half<DI> dh;
+  const hn::RepartitionToWide<DI> d64;  // half as many 64-bit lanes
+  const auto* pairs = reinterpret_cast<const std::int64_t*>(surface);
+  const auto lo = hn::ShiftLeft<1>(hn::PromoteTo(d64, hn::LowerHalf(dh, k)));
+  const auto hi = hn::ShiftLeft<1>(hn::PromoteTo(d64, hn::UpperHalf(dh, k)));
+  const auto one = hn::Set(d64, 1);
+  const VF xy_lo = hn::BitCast(d, hn::GatherIndex(d64, pairs, lo));
+  const VF xy_hi = hn::BitCast(d, hn::GatherIndex(d64, pairs, hi));
+  const VF zp_lo = hn::BitCast(d, hn::GatherIndex(d64, pairs, hn::Add(lo, one)));
+  const VF zp_hi = hn::BitCast(d, hn::GatherIndex(d64, pairs, hn::Add(hi, one)));
+  n = {hn::ConcatEven(d, xy_hi, xy_lo), hn::ConcatOdd(d, xy_hi, xy_lo),
+       hn::ConcatEven(d, zp_hi, zp_lo)};
+  plane = hn::ConcatOdd(d, zp_hi, zp_lo);
+#endif
 }
 // march::antiderivative(t, s, c, nx, ny), per lane.
 struct Antiderivative {
@@ -253,15 +280,19 @@ HWY_INLINE StepLanes TakeStep(DF d, const SampleView& view, int j, int k, VF sx,
   st.k_s = hn::IfThenElseZero(hn::RebindMask(di, m),
                               hn::Add(hn::Mul(sj, hn::Set(di, int(view.row))), col_term));
   st.k3 = hn::Mul(st.k_s, hn::Set(di, 3));
-  st.n_s = Gather3(d, view.normal, st.k3);
   // f.ray_P + L.dv * (sign * o) * float(view.stride)
   const V3 ray = RayAt(px.ray_P, L.dv, hn::Mul(sign, st.o), hn::Set(d, float(view.stride)));
+  VF plane = zero;  // dot(S, n_s), from the view's table where it has one
+  if (view.surface)
+    GatherSurface(d, view.surface, st.k_s, st.n_s, plane);
+  else
+    st.n_s = Gather3(d, view.normal, st.k3);
   const VF denom = DotRay(ray, st.n_s);
   const MF steep =
       hn::Gt(hn::Mul(denom, denom), hn::Mul(hn::Set(d, march::kGrazing2), DotRay(ray, ray)));
-  if (view.plane) {
-    // dot(S, n_s) from the view's table; S itself only where the move does not apply.
-    st.S = ScaleRay(ray, hn::Div(hn::GatherIndex(d, view.plane, st.k_s), denom));
+  if (view.surface) {
+    // S itself only where the move does not apply.
+    st.S = ScaleRay(ray, hn::Div(plane, denom));
     if (!hn::AllFalse(d, hn::AndNot(steep, m)))
       st.S = Select(steep, st.S, Gather3(d, view.position, st.k3));
   } else {
