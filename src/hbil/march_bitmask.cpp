@@ -132,10 +132,16 @@ PixelSums march_bitmask_pixel(const SampleView& view, int i, int j, const Vec3& 
         std::uint32_t fresh = mask & ~occluded_g;
         occluded_g |= mask;
         if (fresh) {
+          // The fresh sectors' AO weight, run by run, lowest first: a run [s, e) weighs
+          // G(e) − G(s). f + low clears the lowest run and sets the bit at its end (none
+          // where the run ends at the last sector).
           float w = 0.f;
-          for (; fresh; fresh &= fresh - 1) {
-            const int q = std::countr_zero(fresh);
-            w += bound[q + 1].ao - bound[q].ao;
+          for (std::uint32_t f = fresh; f != 0;) {
+            const std::uint32_t low = f & (0u - f), g = f + low, end_bit = g & ~f;
+            const int s = std::countr_zero(low);
+            const int e = end_bit != 0 ? std::countr_zero(end_bit) : kSectors;
+            w += bound[e].ao - bound[s].ao;
+            f &= g;
           }
           const float fw = facing_weight(dot(n_s, st.d3) / std::sqrt(st.dist2));
           irradiance += view.radiance[st.k_s] * fw * w;

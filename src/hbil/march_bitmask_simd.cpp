@@ -8,11 +8,10 @@
 //  - a lane's `continue` becomes a mask for that sample, its `break` (the screen edge) a
 //    mask for the rest of the side;
 //  - the sample's fields are gathered by index (position, normal, thickness, radiance);
-//  - the sectors a sample newly covers are summed lowest first, one masked add per sector
-//    that is new in any lane (each sector is new at most once per slice);
-//  - with the gather, the AO antiderivative at the 33 boundaries and the 32 sector weights
-//    are per-lane tables in stack buffers; the open sectors' sums take the boundaries again,
-//    one at a time, after the steps;
+//  - the sectors a sample newly covers weigh, run by run of consecutive sectors, lowest
+//    first, the AO antiderivative at the run's end minus that at its start, both read by
+//    index from a per-lane table of the 33 boundaries (a stack buffer, with the gather only);
+//  - the open sectors' sums take the boundaries again, one at a time, after the steps;
 //  - with a GatherLog, each lane's lit samples are kept per lane and appended pixel by pixel
 //    after the vector, in the scalar march's order.
 // Lanes of background pixels and past the run's end are masked off from the start.
@@ -34,6 +33,17 @@ namespace hbil::HWY_NAMESPACE {
 namespace {
 
 using namespace simd;
+
+// The index of the one set bit of each lane of `bit` (a power of two, as the unsigned
+// integer it is), from the exponent of its conversion to float (exact); bit 31 converts as
+// −2³¹, whose exponent is the same.
+HWY_INLINE VI BitIndex(DF d, VU bit) {
+  const DI di;
+  const DU du;
+  const VU bits = hn::BitCast(du, hn::ConvertTo(d, hn::BitCast(di, bit)));
+  return hn::Sub(hn::BitCast(di, hn::And(hn::ShiftRight<23>(bits), hn::Set(du, 0xFFu))),
+                 hn::Set(di, 127));
+}
 
 // int(std::floor(v + 0.5f)) clamped to [0, kSectors]. The clamped value is a whole number
 // from 0 to 32 (a NaN becomes 0), so c + 2²³ is exact and its bits are those of 2²³ plus c:
@@ -62,12 +72,12 @@ void MarchBitmaskRow(const SampleView& view, int i0, int j, int count, const flo
   const VF stride = hn::Set(d, float(view.stride));
   const VF grazing2 = hn::Set(d, kGrazing2);
   const MF none = hn::FirstN(d, 0);
+  const VI lane_iota = hn::Iota(di, 0), lanes_n = hn::Set(di, int(N));
   const bool has_fill = gather && view.fills(c);
   const V3 fill_c{hn::Set(d, c.fill.x), hn::Set(d, c.fill.y), hn::Set(d, c.fill.z)};
 
   // Per-lane scratch for the gather: the boundaries' AO antiderivative (33 per lane).
   HWY_ALIGN float b_ao[(kSectors + 1) * kMaxLanes];
-  HWY_ALIGN float w_ao[kSectors * kMaxLanes];  // each sector's AO weight, b_ao[k + 1] − b_ao[k]
 
   if (!view.radiance) log = nullptr;
   // The gather log, lane by lane until the lanes' pixels are appended in order: lane l's
@@ -143,9 +153,6 @@ void MarchBitmaskRow(const SampleView& view, int i0, int j, int count, const flo
       if (gather) {
         for_each_boundary(
             [&](int k, const Antiderivative& g) { hn::Store(g.ao, d, b_ao + k * N); });
-        for (int k = 0; k < kSectors; ++k)
-          hn::Store(hn::Sub(hn::Load(d, b_ao + (k + 1) * N), hn::Load(d, b_ao + k * N)), d,
-                    w_ao + k * N);
       }
       VU occluded = hn::Zero(du), occluded_g = hn::Zero(du);
       V3 irradiance{zero, zero, zero};
@@ -235,19 +242,25 @@ void MarchBitmaskRow(const SampleView& view, int i0, int j, int count, const flo
           occluded_g = hn::Or(occluded_g, mask);
           if (hn::AllFalse(du, hn::Ne(fresh, hn::Zero(du)))) continue;
           const MF any_fresh = hn::RebindMask(d, hn::Ne(fresh, hn::Zero(du)));
-          // Σ over each lane's fresh sectors q, lowest first, of the sector's AO weight: one
-          // masked add per sector that is fresh in any lane (neighbouring pixels cover much
-          // the same sectors), in the scalar march's order for every lane.
-          HWY_ALIGN std::uint32_t fresh_lane[kMaxLanes];
-          hn::Store(fresh, du, fresh_lane);
-          std::uint32_t any_bits = 0;
-          for (size_t l = 0; l < N; ++l) any_bits |= fresh_lane[l];
+          // The fresh sectors' AO weight, run by run in every lane (march_bitmask.cpp), the
+          // runs' ends read from the boundary table by index; most lanes have one run.
           VF w = zero;
-          for (; any_bits; any_bits &= any_bits - 1) {
-            const int q = std::countr_zero(any_bits);
-            const MF has =
-                hn::RebindMask(d, hn::Ne(hn::And(fresh, hn::Set(du, 1u << q)), hn::Zero(du)));
-            w = hn::IfThenElse(has, hn::Add(w, hn::Load(d, w_ao + q * N)), w);
+          for (VU f = fresh;;) {
+            const MF active = hn::RebindMask(d, hn::Ne(f, hn::Zero(du)));
+            if (hn::AllFalse(d, active)) break;
+            const VU low = hn::And(f, hn::Sub(hn::Zero(du), f)), g = hn::Add(f, low);
+            const VU end_bit = hn::AndNot(f, g);
+            const VI s_at = hn::Add(hn::Mul(BitIndex(d, low), lanes_n), lane_iota);
+            const VI e_at =
+                hn::Add(hn::Mul(hn::IfThenElse(hn::RebindMask(di, hn::Eq(end_bit, hn::Zero(du))),
+                                               hn::Set(di, kSectors), BitIndex(d, end_bit)),
+                                lanes_n),
+                        lane_iota);
+            const auto act = hn::RebindMask(di, active);
+            const VF bs = hn::GatherIndex(d, b_ao, hn::IfThenElseZero(act, s_at));
+            const VF be = hn::GatherIndex(d, b_ao, hn::IfThenElseZero(act, e_at));
+            w = hn::IfThenElse(active, hn::Add(w, hn::Sub(be, bs)), w);
+            f = hn::And(f, g);
           }
           // view.radiance[k_s] * facing_weight(n_s·d3 / dist) * w
           const VF fw = FacingWeight(d, Dot(n_s, d3), hn::Sqrt(dist2));
@@ -270,7 +283,8 @@ void MarchBitmaskRow(const SampleView& view, int i0, int j, int count, const flo
         for (int k = 0; k < kSectors; ++k) {
           const MF open_g =
               hn::RebindMask(d, hn::Eq(hn::And(occluded_g, hn::Set(du, 1u << k)), hn::Zero(du)));
-          w = hn::IfThenElse(open_g, hn::Add(w, hn::Load(d, w_ao + k * N)), w);
+          const VF wk = hn::Sub(hn::Load(d, b_ao + (k + 1) * N), hn::Load(d, b_ao + k * N));
+          w = hn::IfThenElse(open_g, hn::Add(w, wk), w);
         }
         const V3 fill = view.fill ? Gather3(d, view.fill, px.own3) : fill_c;
         irradiance = Add3(irradiance, Scale(fill, w));
