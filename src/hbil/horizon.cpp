@@ -2,6 +2,7 @@
 #include "hbil/horizon.h"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <numbers>
 
@@ -46,15 +47,17 @@ std::vector<float> step_fractions(const HorizonConfig& c, float jitter) {
   return f;
 }
 
-std::vector<float> texel_surfaces(const Vec3* position, const Vec3* normal, size_t count) {
+std::vector<std::uint64_t> texel_surfaces(const Vec3* position, const Vec3* normal,
+                                          size_t count) {
   // The marches' dot(S, n_s) to the bit: this file is compiled without fused multiply-adds.
-  std::vector<float> surface(4 * count);
+  auto word = [](float lo, float hi) {
+    return std::uint64_t(std::bit_cast<std::uint32_t>(lo)) |
+           std::uint64_t(std::bit_cast<std::uint32_t>(hi)) << 32;
+  };
+  std::vector<std::uint64_t> surface(2 * count);
   for (size_t k = 0; k < count; ++k) {
-    float* r = surface.data() + 4 * k;
-    r[0] = normal[k].x;
-    r[1] = normal[k].y;
-    r[2] = normal[k].z;
-    r[3] = dot(position[k], normal[k]);
+    surface[2 * k] = word(normal[k].x, normal[k].y);
+    surface[2 * k + 1] = word(normal[k].z, dot(position[k], normal[k]));
   }
   return surface;
 }

@@ -41,6 +41,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <vector>
 
 #include "hbil/camera.h"
@@ -104,12 +105,13 @@ struct SampleView {
   const float* thickness = nullptr;
   // HorizonConfig::fill per texel (from its fill_map), or null: HorizonConfig::fill.
   const Vec3* fill = nullptr;
-  // Per texel, indexed like them, 4 floats: the normal and dot(position, normal)
-  // (texel_surfaces), or null. The SIMD marches load each sample's four with two 8-byte
-  // gathers, and move a sample onto the slice's ray along its tangent plane (march_common.h's
-  // take_step) with them, so that they gather a texel's position only where that move does not
-  // apply (a grazing ray): the same bits, fewer loads.
-  const float* surface = nullptr;
+  // Per texel, indexed like them, two 8-byte words (texel_surfaces), or null: the bits of
+  // the normal's (x, y) and of (z, dot(position, normal)), each word's first float in its
+  // low 32 bits. The SIMD marches load a sample's word pair with two 8-byte gathers, and move
+  // a sample onto the slice's ray along its tangent plane (march_common.h's take_step) with
+  // them, so that they gather a texel's position only where that move does not apply (a
+  // grazing ray): the same bits, fewer loads.
+  const std::uint64_t* surface = nullptr;
   std::ptrdiff_t index(int i, int j) const { return j * row + i * col; }
   // Whether a gathering march lights its empty directions, and with what at texel (i, j).
   bool fills(const HorizonConfig& c) const { return radiance && (fill || c.has_fill()); }
@@ -119,7 +121,7 @@ struct SampleView {
 };
 
 // SampleView::surface of `count` contiguous texels: normal[k] and dot(position[k], normal[k]).
-std::vector<float> texel_surfaces(const Vec3* position, const Vec3* normal, size_t count);
+std::vector<std::uint64_t> texel_surfaces(const Vec3* position, const Vec3* normal, size_t count);
 
 // Sums over the slices of one pixel (means are taken by the caller).
 struct PixelSums {

@@ -57,9 +57,9 @@ HorizonImage horizon_full(const ViewGBuffer& g, const HorizonConfig& c, int slic
   std::vector<float> phi(slices);
   for (int s = 0; s < slices; ++s) phi[s] = kPi * (float(s) + 0.5f) / float(slices) + c.rotation;
   const std::vector<float> fraction = step_fractions(c, shifted(0.5f, c.jitter_shift));
-  const std::vector<float> surface =
+  const std::vector<std::uint64_t> surface =
       c.vectorised ? texel_surfaces(g.position.data(), g.normal.data(), g.pixels())
-                   : std::vector<float>{};
+                   : std::vector<std::uint64_t>{};
   SampleView view{g.position.data(),
                   g.normal.data(),
                   g.width,
@@ -110,7 +110,8 @@ HorizonImage horizon_interleaved(const ViewGBuffer& g, const HorizonConfig& c, i
   struct Sub {
     int ox, oy, w, h;
     std::vector<Vec3> pos, nrm, rad, fill;  // contiguous copies (empty when reading in place)
-    std::vector<float> thick, surface;
+    std::vector<float> thick;
+    std::vector<std::uint64_t> surface;
     SampleView view;
     std::vector<float> phi;
     std::vector<float> fraction;  // step positions, with this phase's jitter

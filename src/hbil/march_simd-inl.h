@@ -15,6 +15,7 @@
 
 #include <hwy/highway.h>
 
+#include <bit>
 #include <cmath>
 #include <cstdint>
 
@@ -97,27 +98,29 @@ HWY_INLINE V3 Gather3(DF d, const Vec3* base, VI idx3) {
   return {hn::GatherIndex(d, b, idx3), hn::GatherIndex(d, b + 0, hn::Add(idx3, one)),
           hn::GatherIndex(d, b, hn::Add(idx3, hn::Add(one, one)))};
 }
-// Each lane's texel k of a SampleView::surface table (4 floats a texel): the normal n and
-// the plane's dot(position, n). Two gathers of 8-byte pairs, (x, y) and (z, plane), for each
-// half of the lanes, split into lanes by their even and odd floats: half the elements a
+// Each lane's texel k of a SampleView::surface table: the normal n and the plane's
+// dot(position, n). Two gathers of 8-byte words, (x, y) and (z, plane), for each half of the
+// lanes, split into lanes by their even (low) and odd (high) floats: half the elements a
 // gather of each float would load.
-HWY_INLINE void GatherSurface(DF d, const float* surface, VI k, V3& n, VF& plane) {
+HWY_INLINE void GatherSurface(DF d, const std::uint64_t* surface, VI k, V3& n, VF& plane) {
 #if HWY_TARGET == HWY_SCALAR
-  const VI k4 = hn::Mul(k, hn::Set(DI(), 4));
-  n = {hn::GatherIndex(d, surface, k4), hn::GatherIndex(d, surface + 1, k4),
-       hn::GatherIndex(d, surface + 2, k4)};
-  plane = hn::GatherIndex(d, surface + 3, k4);
+  const std::ptrdiff_t t = hn::GetLane(k);
+  auto lo = [](std::uint64_t w) { return std::bit_cast<float>(std::uint32_t(w)); };
+  auto hi = [](std::uint64_t w) { return std::bit_cast<float>(std::uint32_t(w >> 32)); };
+  n = {hn::Set(d, lo(surface[2 * t])), hn::Set(d, hi(surface[2 * t])),
+       hn::Set(d, lo(surface[2 * t + 1]))};
+  plane = hn::Set(d, hi(surface[2 * t + 1]));
 #else
   const hn::Half<DI> dh;
-  const hn::RepartitionToWide<DI> d64;  // half as many 64-bit lanes
-  const auto* pairs = reinterpret_cast<const std::int64_t*>(surface);
-  const auto lo = hn::ShiftLeft<1>(hn::PromoteTo(d64, hn::LowerHalf(dh, k)));
-  const auto hi = hn::ShiftLeft<1>(hn::PromoteTo(d64, hn::UpperHalf(dh, k)));
-  const auto one = hn::Set(d64, 1);
-  const VF xy_lo = hn::BitCast(d, hn::GatherIndex(d64, pairs, lo));
-  const VF xy_hi = hn::BitCast(d, hn::GatherIndex(d64, pairs, hi));
-  const VF zp_lo = hn::BitCast(d, hn::GatherIndex(d64, pairs, hn::Add(lo, one)));
-  const VF zp_hi = hn::BitCast(d, hn::GatherIndex(d64, pairs, hn::Add(hi, one)));
+  const hn::RepartitionToWide<DI> di64;  // half as many 64-bit lanes
+  const hn::Rebind<std::uint64_t, decltype(di64)> du64;
+  const auto lo = hn::ShiftLeft<1>(hn::PromoteTo(di64, hn::LowerHalf(dh, k)));
+  const auto hi = hn::ShiftLeft<1>(hn::PromoteTo(di64, hn::UpperHalf(dh, k)));
+  const auto one = hn::Set(di64, 1);
+  const VF xy_lo = hn::BitCast(d, hn::GatherIndex(du64, surface, lo));
+  const VF xy_hi = hn::BitCast(d, hn::GatherIndex(du64, surface, hi));
+  const VF zp_lo = hn::BitCast(d, hn::GatherIndex(du64, surface, hn::Add(lo, one)));
+  const VF zp_hi = hn::BitCast(d, hn::GatherIndex(du64, surface, hn::Add(hi, one)));
   n = {hn::ConcatEven(d, xy_hi, xy_lo), hn::ConcatOdd(d, xy_hi, xy_lo),
        hn::ConcatEven(d, zp_hi, zp_lo)};
   plane = hn::ConcatOdd(d, zp_hi, zp_lo);
