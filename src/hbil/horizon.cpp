@@ -47,8 +47,7 @@ std::vector<float> step_fractions(const HorizonConfig& c, float jitter) {
   return f;
 }
 
-std::vector<std::uint64_t> texel_surfaces(const Vec3* position, const Vec3* normal,
-                                          size_t count) {
+std::vector<std::uint64_t> texel_surfaces(const Vec3* position, const Vec3* normal, size_t count) {
   // The marches' dot(S, n_s) to the bit: this file is compiled without fused multiply-adds.
   auto word = [](float lo, float hi) {
     return std::uint64_t(std::bit_cast<std::uint32_t>(lo)) |
