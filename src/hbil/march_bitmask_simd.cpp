@@ -199,12 +199,17 @@ void MarchBitmaskRow(const SampleView& view, int i0, int j, int count, const flo
             t = hn::IfThenElse(measured, th, t);
           }
           VF key_hi = key_f, key_lo = key_f;
-          auto cover = [&](VF q, MF where) {
-            key_hi = hn::IfThenElse(hn::And(where, hn::Lt(key_hi, q)), q, key_hi);
-            key_lo = hn::IfThenElse(hn::And(where, hn::Lt(q, key_lo)), q, key_lo);
+          // key_hi < q ? q : key_hi is Max(q, key_hi) and q < key_lo ? q : key_lo is
+          // Min(q, key_lo), with x86's operand order (the second where neither is larger).
+          auto cover_all = [&](VF q) {
+            key_hi = hn::Max(q, key_hi);
+            key_lo = hn::Min(q, key_lo);
           };
-          const MF all_lanes = hn::FirstN(d, N);
-          cover(key(Add3(S, Scale(S, hn::Div(t, hn::Sqrt(Dot(S, S)))))), all_lanes);
+          auto cover = [&](VF q, MF where) {
+            key_hi = hn::IfThenElse(where, hn::Max(q, key_hi), key_hi);
+            key_lo = hn::IfThenElse(where, hn::Min(q, key_lo), key_lo);
+          };
+          cover_all(key(Add3(S, Scale(S, hn::Div(t, hn::Sqrt(Dot(S, S)))))));
           if (!hn::AllFalse(d, measured)) {
             const VF o_prev = k == 0 ? zero : hn::Min(offset(k - 1), o);
             const VF lo_o = hn::Mul(half, hn::Add(o, o_prev));

@@ -191,15 +191,19 @@ inline StepResult take_step(const SampleView& view, int i, int j, int k, float s
   return StepResult::use;
 }
 
-// The SIMD row marches index the view's floats with 32-bit lane integers: a view too large
-// for them (more than about 700 million texels) is marched pixel by pixel by the scalar
-// reference, march_one(i, P, n) giving the sums of texel (i, j).
+// The SIMD row marches index the view's floats with 32-bit lane integers, and round a step's
+// offset in texels (under the view's diagonal) through a float with 23 bits to spare
+// (FloorToInt): a view too large for them (more than about 700 million texels, or 2²¹
+// texels a side) is marched pixel by pixel by the scalar reference, march_one(i, P, n)
+// giving the sums of texel (i, j).
 template <class MarchOne>
 bool march_row_scalar_if_too_large(const SampleView& view, int i0, int j, int count, PixelSums* out,
                                    MarchOne march_one) {
   const std::int64_t last =
       std::int64_t(view.height - 1) * view.row + std::int64_t(view.width - 1) * view.col;
-  if (3 * last + 2 <= std::int64_t(INT32_MAX)) return false;
+  constexpr int kSide = 1 << 21;
+  if (3 * last + 2 <= std::int64_t(INT32_MAX) && view.width < kSide && view.height < kSide)
+    return false;
   for (int k = 0; k < count; ++k) {
     const std::ptrdiff_t at = view.index(i0 + k, j);
     if (!(view.position[at].z < ViewGBuffer::kBackground)) continue;

@@ -248,6 +248,20 @@ HWY_INLINE SliceLanes SliceLine(DF d, const PixelLanes& px, const HorizonConfig&
   return L;
 }
 
+// int(std::floor(v)) for |v| < 2²², which a step's offset in texels is (it is under the
+// view's diagonal, and the march takes views under 2²¹ texels a side;
+// march_row_scalar_if_too_large), else ±2²² (a NaN gives 2²²): off the view either way. The
+// floor of the clamped value is a whole number f, so f + 1.5 · 2²³ is exact, in [2²³, 2²⁴],
+// and its bits are those of 1.5 · 2²³ plus f: the integer without ConvertTo's fix-up of
+// out-of-range values (four instructions, for the clamp's two).
+HWY_INLINE VI FloorToInt(DF d, VF v) {
+  const DI di;
+  constexpr float kMagic = 12582912.f, kLimit = 4194304.f;  // 1.5 · 2²³ (0x4B400000), 2²²
+  const VF c = hn::Max(hn::Min(v, hn::Set(d, kLimit)), hn::Set(d, -kLimit));
+  return hn::Sub(hn::BitCast(di, hn::Add(hn::Floor(c), hn::Set(d, kMagic))),
+                 hn::Set(di, 0x4B400000));
+}
+
 // march::take_step of step k on one side (sx, sy = ±(dx, dy), sign = ±1). `alive`: the lanes
 // not yet past the screen edge, updated. `m` of the result: the lanes whose sample is used.
 struct StepLanes {
@@ -266,8 +280,8 @@ HWY_INLINE StepLanes TakeStep(DF d, const SampleView& view, int j, int k, VF sx,
   const bool near = k < c.steps;
   MF m = near ? hn::AndNot(px.tiny, alive) : alive;
   st.o = StepOffset(d, px, c, fraction, k);
-  const VI oi = hn::ConvertTo(di, hn::Floor(hn::Add(hn::Mul(sx, st.o), half)));
-  const VI oj = hn::ConvertTo(di, hn::Floor(hn::Add(hn::Mul(sy, st.o), half)));
+  const VI oi = FloorToInt(d, hn::Add(hn::Mul(sx, st.o), half));
+  const VI oj = FloorToInt(d, hn::Add(hn::Mul(sy, st.o), half));
   const MF at_p = hn::RebindMask(d, hn::And(hn::Eq(oi, hn::Zero(di)), hn::Eq(oj, hn::Zero(di))));
   m = hn::AndNot(at_p, m);
   const VI si = hn::Add(px.ii, oi), sj = hn::Add(hn::Set(di, j), oj);
