@@ -152,6 +152,28 @@ TEST(MarchSimd, MatchesScalarWhereTheRayGrazesTheSample) {
   compare_kernels(v, make_horizon_config(p, cam), nullptr, 3);
 }
 
+// Texels behind the camera and at its centre (a depth pass with bad pixels gives them): their
+// radius in texels is negative, and just behind the camera, their gather-only steps' offsets
+// are far beyond any view, which both marches clamp before rounding to an integer; they must
+// agree there too, and not read outside the view (ASan).
+TEST(MarchSimd, MatchesScalarWhereTexelsLieBehindTheCamera) {
+  Camera cam;
+  const GBuffer g = groove_scene(cam, 67, 41);
+  Params p;
+  ViewGBuffer v = make_view_gbuffer(g, cam, p);
+  size_t odd = 0;
+  for (size_t i = 0; i < v.pixels(); i += 7) {
+    if (v.is_background(i)) continue;
+    const float scale[3] = {-1.f, -1e-30f, 0.f};  // behind; just behind; at the centre
+    v.position[i] = v.position[i] * scale[i % 3];
+    ++odd;
+  }
+  ASSERT_GT(odd, 200u);
+  std::vector<Vec3> radiance(v.pixels(), Vec3{0.5f, 0.25f, 1.f});
+  compare_kernels(v, make_horizon_config(p, cam), &radiance, 2);
+  compare_kernels(v, make_horizon_config(p, cam), nullptr, 3);
+}
+
 // samples/room_poles frame 3 as the search sees it.
 struct Sample {
   GBuffer g;

@@ -160,6 +160,17 @@ inline MarchSetup march_setup(const SampleView& view, const Vec3& P, const Horiz
   return m;
 }
 
+// int(std::floor(v)) for |v| < 2²², else ±2²² (a NaN gives 2²²), without the undefined
+// conversion of a float out of int's range: a step's offset in texels is under the view's
+// diagonal where the pixel lies in front of the camera, and anything clamped falls off a
+// view under 2²¹ texels a side (march_row_scalar_if_too_large) as it would unclamped.
+// FloorToInt (march_simd-inl.h) is the same, lane by lane.
+constexpr float kOffsetLimit = 4194304.f;  // 2²²
+inline int floor_to_int(float v) {
+  const float below = v < kOffsetLimit ? v : kOffsetLimit;  // x86's min and max, NaN last
+  return int(std::floor(below > -kOffsetLimit ? below : -kOffsetLimit));
+}
+
 // Step k of one side of a slice (sx, sy: its screen direction; sign: +1 on the +D side).
 enum class StepResult { use, skip, edge };
 struct Step {
@@ -173,7 +184,7 @@ inline StepResult take_step(const SampleView& view, int i, int j, int k, float s
                             const HorizonConfig& c, const float* fraction, Step& st) {
   if (k < c.steps && m.f.r_tex < 1.f) return StepResult::skip;  // AO radius under a texel
   st.o = step_offset(k, c.steps, m.f.r_tex, m.f.rg_tex, fraction);
-  const int oi = int(std::floor(sx * st.o + 0.5f)), oj = int(std::floor(sy * st.o + 0.5f));
+  const int oi = floor_to_int(sx * st.o + 0.5f), oj = floor_to_int(sy * st.o + 0.5f);
   if (oi == 0 && oj == 0) return StepResult::skip;
   const int si = i + oi, sj = j + oj;
   if (si < 0 || sj < 0 || si >= view.width || sj >= view.height) return StepResult::edge;

@@ -248,16 +248,15 @@ HWY_INLINE SliceLanes SliceLine(DF d, const PixelLanes& px, const HorizonConfig&
   return L;
 }
 
-// int(std::floor(v)) for |v| < 2²², which a step's offset in texels is (it is under the
-// view's diagonal, and the march takes views under 2²¹ texels a side;
-// march_row_scalar_if_too_large), else ±2²² (a NaN gives 2²²): off the view either way. The
-// floor of the clamped value is a whole number f, so f + 1.5 · 2²³ is exact, in [2²³, 2²⁴],
-// and its bits are those of 1.5 · 2²³ plus f: the integer without ConvertTo's fix-up of
-// out-of-range values (four instructions, for the clamp's two).
+// march::floor_to_int, lane by lane. The floor of the clamped value is a whole number f, so
+// f + 1.5 · 2²³ is exact, in [2²³, 2²⁴], and its bits are those of 1.5 · 2²³ plus f: the
+// integer without ConvertTo's fix-up of out-of-range values (four instructions, for the
+// clamp's two).
 HWY_INLINE VI FloorToInt(DF d, VF v) {
   const DI di;
-  constexpr float kMagic = 12582912.f, kLimit = 4194304.f;  // 1.5 · 2²³ (0x4B400000), 2²²
-  const VF c = hn::Max(hn::Min(v, hn::Set(d, kLimit)), hn::Set(d, -kLimit));
+  constexpr float kMagic = 12582912.f;  // 1.5 · 2²³, 0x4B400000
+  const VF limit = hn::Set(d, march::kOffsetLimit);
+  const VF c = hn::Max(hn::Min(v, limit), hn::Neg(limit));
   return hn::Sub(hn::BitCast(di, hn::Add(hn::Floor(c), hn::Set(d, kMagic))),
                  hn::Set(di, 0x4B400000));
 }
