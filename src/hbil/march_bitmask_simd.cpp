@@ -11,7 +11,9 @@
 //  - the sectors a sample newly covers weigh, run by run of consecutive sectors, lowest
 //    first, the AO antiderivative at the run's end minus that at its start, both read by
 //    index from a per-lane table of the 33 boundaries (a stack buffer, with the gather only);
-//  - the open sectors' sums take the boundaries again, one at a time, after the steps;
+//  - the open sectors' sums take the boundaries after the steps, one at a time, from the
+//    gather's tables of them (ao, vis and the bent vector's two terms) or, without the
+//    gather, computed there;
 //  - with a GatherLog, each lane's lit samples are kept per lane and appended pixel by pixel
 //    after the vector, in the scalar march's order.
 // Lanes of background pixels and past the run's end are masked off from the start.
@@ -76,8 +78,10 @@ void MarchBitmaskRow(const SampleView& view, int i0, int j, int count, const flo
   const bool has_fill = gather && view.fills(c);
   const V3 fill_c{hn::Set(d, c.fill.x), hn::Set(d, c.fill.y), hn::Set(d, c.fill.z)};
 
-  // Per-lane scratch for the gather: the boundaries' AO antiderivative (33 per lane).
-  HWY_ALIGN float b_ao[(kSectors + 1) * kMaxLanes];
+  // Per-lane scratch for the gather: the boundaries' antiderivatives (33 per lane), AO for
+  // the sector weights, all four again for the open sectors' sums.
+  HWY_ALIGN float b_ao[(kSectors + 1) * kMaxLanes], b_vis[(kSectors + 1) * kMaxLanes],
+      b_bx[(kSectors + 1) * kMaxLanes], b_by[(kSectors + 1) * kMaxLanes];
 
   if (!view.radiance) log = nullptr;
   // The gather log, lane by lane until the lanes' pixels are appended in order: lane l's
@@ -149,10 +153,15 @@ void MarchBitmaskRow(const SampleView& view, int i0, int j, int count, const flo
         }
       };
       // The gather's sector weights (fresh sectors, fill) need every boundary's ao before
-      // the steps; the march's own sums take the boundaries after them.
+      // the steps, and keep the boundaries for the march's own sums after them; without
+      // the gather, the sums take the boundaries after the steps.
       if (gather) {
-        for_each_boundary(
-            [&](int k, const Antiderivative& g) { hn::Store(g.ao, d, b_ao + k * N); });
+        for_each_boundary([&](int k, const Antiderivative& g) {
+          hn::Store(g.ao, d, b_ao + k * N);
+          hn::Store(g.vis, d, b_vis + k * N);
+          hn::Store(g.bx, d, b_bx + k * N);
+          hn::Store(g.by, d, b_by + k * N);
+        });
       }
       VU occluded = hn::Zero(du), occluded_g = hn::Zero(du);
       V3 irradiance{zero, zero, zero};
@@ -305,7 +314,7 @@ void MarchBitmaskRow(const SampleView& view, int i0, int j, int count, const flo
       // The open sectors' sums, boundary by boundary (march_bitmask.cpp).
       VF s_ao = zero, s_vis = zero, s_bx = zero, s_by = zero;
       MF before = none;  // sector k − 1 is open
-      for_each_boundary([&](int k, const Antiderivative& g) {
+      auto add_boundary = [&](int k, const Antiderivative& g) {
         const MF after =
             k < kSectors ? hn::RebindMask(d, hn::Eq(hn::And(occluded, hn::Set(du, 1u << (k & 31))),
                                                     hn::Zero(du)))
@@ -316,7 +325,14 @@ void MarchBitmaskRow(const SampleView& view, int i0, int j, int count, const flo
         s_bx = hn::Add(s_bx, hn::Mul(coef, g.bx));
         s_by = hn::Add(s_by, hn::Mul(coef, g.by));
         before = after;
-      });
+      };
+      if (gather) {
+        for (int k = 0; k <= kSectors; ++k)
+          add_boundary(k, {hn::Load(d, b_ao + k * N), hn::Load(d, b_vis + k * N),
+                           hn::Load(d, b_bx + k * N), hn::Load(d, b_by + k * N)});
+      } else {
+        for_each_boundary(add_boundary);
+      }
       acc_ao = hn::IfThenElse(live, hn::Add(acc_ao, s_ao), acc_ao);
       acc_vis = hn::IfThenElse(live, hn::Add(acc_vis, s_vis), acc_vis);
       acc_b = Select(live, Add3(acc_b, Add3(Scale(D, s_bx), Scale(wo, s_by))), acc_b);
