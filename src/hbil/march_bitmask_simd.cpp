@@ -209,7 +209,9 @@ void MarchBitmaskRow(const SampleView& view, int i0, int j, int count, const flo
           }
           VF key_hi = key_f, key_lo = key_f;
           // key_hi < q ? q : key_hi is Max(q, key_hi) and q < key_lo ? q : key_lo is
-          // Min(q, key_lo), with x86's operand order (the second where neither is larger).
+          // Min(q, key_lo): x86's give the second operand where neither is larger, and
+          // where another target gives the first, it differs only in a zero's sign, which
+          // the angle ignores (keys are never NaN).
           auto cover_all = [&](VF q) {
             key_hi = hn::Max(q, key_hi);
             key_lo = hn::Min(q, key_lo);

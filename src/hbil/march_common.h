@@ -167,7 +167,8 @@ inline MarchSetup march_setup(const SampleView& view, const Vec3& P, const Horiz
 // FloorToInt (march_simd-inl.h) is the same, lane by lane.
 constexpr float kOffsetLimit = 4194304.f;  // 2²²
 inline int floor_to_int(float v) {
-  const float below = v < kOffsetLimit ? v : kOffsetLimit;  // x86's min and max, NaN last
+  // x86's min(v, limit) and max(·, −limit): a NaN v gives the limit.
+  const float below = v < kOffsetLimit ? v : kOffsetLimit;
   return int(std::floor(below > -kOffsetLimit ? below : -kOffsetLimit));
 }
 
