@@ -47,15 +47,10 @@ HWY_INLINE VI BitIndex(DF d, VU bit) {
                  hn::Set(di, 127));
 }
 
-// int(std::floor(v + 0.5f)) clamped to [0, kSectors]. The clamped value is a whole number
-// from 0 to 32 (a NaN becomes 0), so c + 2²³ is exact and its bits are those of 2²³ plus c:
-// the integer without ConvertTo's fix-up of out-of-range values (four more instructions).
+// int(std::floor(v + 0.5f)) clamped to [0, kSectors] (a NaN becomes 0), through WholeToInt.
 HWY_INLINE VI SectorIndex(DF d, VF v) {
-  const DI di;
   const VF f = hn::Floor(hn::Add(v, hn::Set(d, 0.5f)));
-  const VF c = hn::Min(hn::Max(f, hn::Zero(d)), hn::Set(d, float(march::kSectors)));
-  constexpr float kTwo23 = 8388608.f;  // 0x4B000000
-  return hn::Sub(hn::BitCast(di, hn::Add(c, hn::Set(d, kTwo23))), hn::Set(di, 0x4B000000));
+  return WholeToInt(d, hn::Min(hn::Max(f, hn::Zero(d)), hn::Set(d, float(march::kSectors))));
 }
 
 }  // namespace

@@ -248,17 +248,17 @@ HWY_INLINE SliceLanes SliceLine(DF d, const PixelLanes& px, const HorizonConfig&
   return L;
 }
 
-// march::floor_to_int, lane by lane. The floor of the clamped value is a whole number f, so
-// f + 1.5 · 2²³ is exact, in [2²³, 2²⁴], and its bits are those of 1.5 · 2²³ plus f: the
-// integer without ConvertTo's fix-up of out-of-range values (four instructions, for the
-// clamp's two).
-HWY_INLINE VI FloorToInt(DF d, VF v) {
-  const DI di;
+// The integer of a whole float f with |f| <= 2²²: f + 1.5 · 2²³ is exact, in [2²³, 2²⁴],
+// and its bits are those of 1.5 · 2²³ plus f. Without ConvertTo's fix-up of out-of-range
+// values (four instructions), for values already clamped.
+HWY_INLINE VI WholeToInt(DF d, VF f) {
   constexpr float kMagic = 12582912.f;  // 1.5 · 2²³, 0x4B400000
+  return hn::Sub(hn::BitCast(DI(), hn::Add(f, hn::Set(d, kMagic))), hn::Set(DI(), 0x4B400000));
+}
+// march::floor_to_int, lane by lane.
+HWY_INLINE VI FloorToInt(DF d, VF v) {
   const VF limit = hn::Set(d, march::kOffsetLimit);
-  const VF c = hn::Max(hn::Min(v, limit), hn::Neg(limit));
-  return hn::Sub(hn::BitCast(di, hn::Add(hn::Floor(c), hn::Set(d, kMagic))),
-                 hn::Set(di, 0x4B400000));
+  return WholeToInt(d, hn::Floor(hn::Max(hn::Min(v, limit), hn::Neg(limit))));
 }
 
 // march::take_step of step k on one side (sx, sy = ±(dx, dy), sign = ±1). `alive`: the lanes
